@@ -1,0 +1,54 @@
+//! Argument definitions and dispatch.
+
+mod bench;
+mod generate;
+mod info;
+
+use clap::{Parser, Subcommand};
+
+use organtex::Result;
+
+/// Automatic texturing of organ scenes for surgical simulators.
+///
+/// With no command, prints `info` for the bundled Stanford bunny.
+#[derive(Parser)]
+#[command(name = "organtex", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Describe a mesh: counts, facets, components, genus, boundary loops,
+    /// defects, bounds, area, volume and curvature statistics.
+    Info(info::Args),
+    /// Time the project's standard workloads (median of several runs).
+    Bench(bench::Args),
+    /// Write a generated test shape (torus, double torus, cylinder, sphere).
+    Generate(generate::Args),
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Some(Command::Info(args)) => info::run(args),
+        Some(Command::Bench(args)) => bench::run(args),
+        Some(Command::Generate(args)) => generate::run(args),
+        None => info::run(info::Args::for_file(
+            organtex::bench::default_data_dir().join("bunny.obj"),
+        )),
+    }
+}
+
+/// Group digits in threes, as the reports print counts: 56172 -> "56,172".
+pub fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}

@@ -1,0 +1,82 @@
+//! Reading and writing meshes. `read` picks the format from the extension,
+//! parses, and checks what every stage relies on (see `TriMesh`), so a mesh
+//! that loads is one the rest of organtex can use.
+
+mod obj;
+mod ply;
+mod stl;
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::mesh::{TriMesh, defects::is_degenerate};
+
+/// The formats `read` understands, by extension.
+pub const READABLE: &[&str] = &["obj", "ply", "stl"];
+
+/// Read a mesh from an OBJ, PLY or STL file.
+pub fn read(path: &Path) -> Result<TriMesh> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let parse = match ext.as_str() {
+        "obj" => obj::parse,
+        "ply" => ply::parse,
+        "stl" => stl::parse,
+        _ => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "unknown mesh format '{}' (organtex reads {})",
+                    if ext.is_empty() {
+                        "(no extension)".to_string()
+                    } else {
+                        format!(".{ext}")
+                    },
+                    READABLE
+                        .iter()
+                        .map(|e| format!(".{e}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+    };
+    if path.is_dir() {
+        return Err(Error::format(path, "is a directory, not a mesh file"));
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if bytes.is_empty() {
+        return Err(Error::format(path, "the file is empty"));
+    }
+    let mesh = parse(path, &bytes)?;
+    check_usable(path, &mesh)?;
+    Ok(mesh)
+}
+
+/// A mesh with no faces, or only zero-area ones, is no mesh to texture.
+fn check_usable(path: &Path, mesh: &TriMesh) -> Result<()> {
+    if mesh.triangles.is_empty() {
+        return Err(Error::format(
+            path,
+            format!(
+                "no faces: the file holds {} vertices and no triangles",
+                mesh.num_vertices()
+            ),
+        ));
+    }
+    if (0..mesh.num_faces()).all(|f| is_degenerate(mesh, f)) {
+        return Err(Error::format(
+            path,
+            format!("all {} faces have zero area (degenerate)", mesh.num_faces()),
+        ));
+    }
+    Ok(())
+}
+
+/// Write `mesh` as OBJ (with its uvs), plus an .mtl mapping `texture` when
+/// given. Atomic: no half-written file is ever left behind.
+pub fn write_obj(path: &Path, mesh: &TriMesh, texture: Option<&Path>) -> Result<()> {
+    obj::write(path, mesh, texture)
+}

@@ -1,0 +1,22 @@
+//! The mesh layer every stage shares: the indexed triangle mesh, its
+//! half-edge topology, defect detection and repair, components and genus,
+//! curvature, reading and writing, and the test shapes.
+
+pub mod components;
+pub mod curvature;
+pub mod defects;
+mod dsu;
+pub mod edges;
+mod fans;
+pub mod halfedge;
+pub mod ids;
+pub mod info;
+pub mod io;
+pub mod repair;
+pub mod shapes;
+mod trimesh;
+
+pub use components::{ComponentTopology, Components};
+pub use halfedge::Topology;
+pub use ids::{EdgeId, FaceId, HalfedgeId, VertexId};
+pub use trimesh::{Facets, TriMesh, UvLayer};

@@ -1,0 +1,260 @@
+//! Bad input through the CLI: each case must exit non-zero with one clear
+//! message naming the file and what is wrong, never panic, and leave no
+//! output behind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+struct Case {
+    name: &'static str,
+    file: &'static str,
+    content: Option<Vec<u8>>,
+    /// Text the error must contain (besides the file name).
+    expect: &'static str,
+}
+
+fn case(name: &'static str, file: &'static str, content: &[u8], expect: &'static str) -> Case {
+    Case {
+        name,
+        file,
+        content: Some(content.to_vec()),
+        expect,
+    }
+}
+
+fn binary_stl_claiming(triangles: u32, actual: usize) -> Vec<u8> {
+    let mut b = vec![0u8; 80];
+    b.extend(triangles.to_le_bytes());
+    b.extend(vec![0u8; actual * 50]);
+    b
+}
+
+fn cases() -> Vec<Case> {
+    vec![
+        Case {
+            name: "missing file",
+            file: "nowhere.obj",
+            content: None,
+            expect: "No such file",
+        },
+        case("empty file", "empty.obj", b"", "the file is empty"),
+        case(
+            "truncated obj",
+            "trunc.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2",
+            "line 4: a face needs at least 3 vertices, this one has 2",
+        ),
+        case(
+            "truncated vertex",
+            "trunc_v.obj",
+            b"v 0 0 0\nv 1 0",
+            "line 2: a vertex needs 3 coordinates, found 2",
+        ),
+        case(
+            "non-numeric coordinate",
+            "text.obj",
+            b"v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n",
+            "line 2: vertex coordinate 'zero' is not a number",
+        ),
+        case(
+            "NaN coordinate",
+            "nan.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n",
+            "line 3: vertex coordinate 'NaN' is not a finite number",
+        ),
+        case(
+            "infinite coordinate",
+            "inf.obj",
+            b"v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n",
+            "line 2: vertex coordinate 'inf' is not a finite number",
+        ),
+        case(
+            "face index out of range",
+            "range.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+            "line 4: face refers to vertex 9 but the file defines only 3 vertices",
+        ),
+        case(
+            "face index zero",
+            "zero.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+            "line 4: vertex index 0 is invalid (OBJ indices start at 1)",
+        ),
+        case(
+            "relative index before the start",
+            "relative.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -7\n",
+            "line 4: relative vertex index -7 reaches before the first vertex",
+        ),
+        case(
+            "malformed face vertex",
+            "slash.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/ 2 3\n",
+            "line 4: malformed face vertex '1/'",
+        ),
+        case(
+            "PLY header claiming 10^12 vertices",
+            "huge.ply",
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x00\x00\x00\x00",
+            "declares 1000000000000 vertex elements",
+        ),
+        case(
+            "wrong PLY magic",
+            "magic.ply",
+            b"plx\nformat ascii 1.0\nend_header\n",
+            "not a PLY file",
+        ),
+        case(
+            "truncated binary PLY",
+            "short.ply",
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n\x00\x00\x00\x00",
+            "need at least 24 bytes, but only 4 bytes",
+        ),
+        case(
+            "PLY face index out of range",
+            "index.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+            "face 0: vertex index 7 is out of range (the file has 3 vertices)",
+        ),
+        case(
+            "PLY NaN coordinate",
+            "nan.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
+            "line 11: vertex 1: coordinate y is NaN",
+        ),
+        case(
+            "wrong STL magic",
+            "junk.stl",
+            b"GIF89a not a mesh",
+            "not an STL file",
+        ),
+        case(
+            "binary STL size disagrees with its triangle count",
+            "count.stl",
+            &binary_stl_claiming(10, 3),
+            "declares 10 triangles, which take 584 bytes, but the file has 234 bytes",
+        ),
+        case(
+            "ascii STL without endsolid",
+            "open.stl",
+            b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n",
+            "the file ends inside a solid",
+        ),
+        case(
+            "non-manifold edge",
+            "fin.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+            "non-manifold edge (v0, v1) is shared by 3 faces (f0, f1, f2)",
+        ),
+        case(
+            "all-degenerate mesh",
+            "flat.obj",
+            b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n",
+            "all 2 faces have zero area",
+        ),
+        case(
+            "vertices but no faces",
+            "cloud.obj",
+            b"v 0 0 0\nv 1 0 0\n",
+            "no faces: the file holds 2 vertices",
+        ),
+        case(
+            "unknown file extension",
+            "mesh.xyz",
+            b"0 0 0\n",
+            "unknown mesh format '.xyz' (organtex reads .obj, .ply, .stl)",
+        ),
+    ]
+}
+
+fn organtex(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(args)
+        .output()
+        .expect("run organtex");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn check_refused(name: &str, path: &Path, expect: &str, args: &[&str]) {
+    let (ok, stdout, stderr) = organtex(args);
+    assert!(!ok, "{name}: exit code 0\n{stdout}");
+    assert!(!stderr.contains("panicked"), "{name}: panic\n{stderr}");
+    let file = path.display().to_string();
+    assert!(
+        stderr.contains(&file),
+        "{name}: the error does not name {file}:\n{stderr}"
+    );
+    assert!(
+        stderr.contains(expect),
+        "{name}: expected `{expect}` in:\n{stderr}"
+    );
+    assert_eq!(
+        stderr.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{name}: one error\n{stderr}"
+    );
+}
+
+#[test]
+fn every_bad_input_gets_one_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let all = cases();
+    assert!(all.len() >= 15);
+    for c in &all {
+        let path = dir.path().join(c.file);
+        if let Some(bytes) = &c.content {
+            std::fs::write(&path, bytes).unwrap();
+        }
+        check_refused(c.name, &path, c.expect, &["info", path.to_str().unwrap()]);
+    }
+}
+
+#[test]
+fn a_directory_is_not_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("folder.obj");
+    std::fs::create_dir(&folder).unwrap();
+    check_refused(
+        "directory",
+        &folder,
+        "is a directory",
+        &["info", folder.to_str().unwrap()],
+    );
+}
+
+#[test]
+fn non_manifold_input_is_repaired_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fin.obj");
+    std::fs::write(
+        &path,
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    )
+    .unwrap();
+    let (ok, stdout, stderr) = organtex(&["info", "--repair", "--json", path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["defects"]["non_manifold_edges"], 1);
+    assert_eq!(report["repair"]["cut_edges"], 1);
+    assert_eq!(report["components"], 3, "three fins once the edge is split");
+}
+
+#[test]
+fn failed_curvature_export_leaves_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj");
+    let target = dir.path().join("missing/k.csv");
+    let (ok, _, stderr) = organtex(&[
+        "info",
+        bunny.to_str().unwrap(),
+        "--curvature-out",
+        target.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(stderr.contains("missing/k.csv"), "{stderr}");
+    assert!(!target.exists());
+}

@@ -54,6 +54,9 @@ pub enum Error {
         first: String,
         summary: String,
     },
+    /// The user cancelled a long operation.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -7,6 +7,10 @@
 pub mod atomic;
 pub mod bench;
 pub mod error;
+pub mod linalg;
 pub mod mesh;
+pub mod progress;
+pub mod raster;
+pub mod unwrap;
 
 pub use error::{Error, Result};

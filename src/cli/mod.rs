@@ -3,6 +3,9 @@
 mod bench;
 mod generate;
 mod info;
+mod progress;
+mod unwrap;
+mod uv_metrics;
 
 use clap::{Parser, Subcommand};
 
@@ -25,6 +28,12 @@ enum Command {
     Info(info::Args),
     /// Time the project's standard workloads (median of several runs).
     Bench(bench::Args),
+    /// Cut a mesh along hidden seams into disk charts and flatten them
+    /// (Seamster + ABF++); writes an OBJ with uvs.
+    Unwrap(unwrap::Args),
+    /// Distortion figures of a mesh's existing uv layout (charts, flips,
+    /// conformality, area distortion, seam length and visibility).
+    UvMetrics(uv_metrics::Args),
     /// Write a generated test shape (torus, double torus, cylinder, sphere).
     Generate(generate::Args),
 }
@@ -34,6 +43,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Info(args)) => info::run(args),
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Generate(args)) => generate::run(args),
+        Some(Command::Unwrap(args)) => unwrap::run(args),
+        Some(Command::UvMetrics(args)) => uv_metrics::run(args),
         None => info::run(info::Args::for_file(
             organtex::bench::default_data_dir().join("bunny.obj"),
         )),

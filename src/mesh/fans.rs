@@ -34,3 +34,33 @@ pub fn corner_fans(
     }
     sets.labels()
 }
+
+/// Give every fan its own vertex: the first fan met at a vertex keeps its
+/// index, each further fan gets a new index from `num_vertices` on.
+/// Rewrites `triangles` and returns, for each new index in order, the
+/// vertex it was split from.
+pub fn split_by_fans(
+    triangles: &mut [[u32; 3]],
+    num_vertices: usize,
+    fan_of_corner: &[u32],
+    num_fans: usize,
+) -> Vec<u32> {
+    let mut vertex_of_fan = vec![u32::MAX; num_fans];
+    let mut claimed = vec![false; num_vertices];
+    let mut split_from = Vec::new();
+    for (c, &fan) in fan_of_corner.iter().enumerate() {
+        let (f, i) = (c / 3, c % 3);
+        let v = triangles[f][i];
+        let fan = fan as usize;
+        if vertex_of_fan[fan] == u32::MAX {
+            vertex_of_fan[fan] = if std::mem::replace(&mut claimed[v as usize], true) {
+                split_from.push(v);
+                (num_vertices + split_from.len() - 1) as u32
+            } else {
+                v
+            };
+        }
+        triangles[f][i] = vertex_of_fan[fan];
+    }
+    split_from
+}

@@ -5,15 +5,16 @@
 pub mod components;
 pub mod curvature;
 pub mod defects;
-mod dsu;
+pub(crate) mod dsu;
 pub mod edges;
-mod fans;
+pub mod fans;
 pub mod halfedge;
 pub mod ids;
 pub mod info;
 pub mod io;
 pub mod repair;
 pub mod shapes;
+pub mod submesh;
 mod trimesh;
 
 pub use components::{ComponentTopology, Components};

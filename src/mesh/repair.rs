@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use super::defects::is_repeated;
 use super::edges::{EdgeTable, halfedge_endpoints};
-use super::fans::corner_fans;
+use super::fans::{corner_fans, split_by_fans};
 use super::halfedge::Topology;
 use super::ids::HalfedgeId;
 use super::trimesh::TriMesh;
@@ -68,7 +68,14 @@ pub fn make_manifold(mesh: &TriMesh) -> (TriMesh, RepairReport) {
         let joins =
             |hs: &[HalfedgeId]| opposite_pair(hs) && hs.iter().all(|h| !detached[h.idx() / 3]);
         let (fan_of_corner, num_fans) = corner_fans(tris, &edges, joins);
-        report.split_vertices += split_into_fans(&mut out, &fan_of_corner, num_fans);
+        let n = out.num_vertices();
+        let split_from = split_by_fans(&mut out.triangles, n, &fan_of_corner, num_fans);
+        report.split_vertices += split_from.len();
+        let copies: Vec<_> = split_from
+            .iter()
+            .map(|&v| out.positions[v as usize])
+            .collect();
+        out.positions.extend(copies);
 
         // Faces on an edge that splitting could not open get detached, and
         // the loop splits again around what is left.
@@ -195,28 +202,4 @@ fn orient_consistently(mesh: &mut TriMesh, report: &mut RepairReport) {
             }
         }
     }
-}
-
-/// Give every fan its own vertex: the first fan at a vertex keeps it, each
-/// further fan gets a copy appended. Returns how many copies were added.
-fn split_into_fans(mesh: &mut TriMesh, fan_of_corner: &[u32], num_fans: usize) -> usize {
-    let mut vertex_of_fan = vec![u32::MAX; num_fans];
-    let mut claimed = vec![false; mesh.num_vertices()];
-    let mut added = 0;
-    for (c, &fan) in fan_of_corner.iter().enumerate() {
-        let (f, i) = (c / 3, c % 3);
-        let v = mesh.triangles[f][i];
-        let fan = fan as usize;
-        if vertex_of_fan[fan] == u32::MAX {
-            vertex_of_fan[fan] = if std::mem::replace(&mut claimed[v as usize], true) {
-                mesh.positions.push(mesh.positions[v as usize]);
-                added += 1;
-                (mesh.positions.len() - 1) as u32
-            } else {
-                v
-            };
-        }
-        mesh.triangles[f][i] = vertex_of_fan[fan];
-    }
-    added
 }

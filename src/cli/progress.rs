@@ -1,0 +1,49 @@
+//! Progress bars for the library's long stages (indicatif).
+
+use std::sync::Mutex;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use organtex::progress::Progress;
+
+/// One bar per stage; a new stage finishes the previous bar. Hidden when
+/// stderr is not a terminal (indicatif's default), so logs stay clean.
+pub struct Bars {
+    current: Mutex<Option<ProgressBar>>,
+}
+
+impl Bars {
+    pub fn new() -> Self {
+        Bars {
+            current: Mutex::new(None),
+        }
+    }
+
+    pub fn finish(&self) {
+        if let Some(bar) = self.current.lock().expect("progress lock").take() {
+            bar.finish();
+        }
+    }
+}
+
+impl Progress for Bars {
+    fn stage(&self, name: &str, total: u64) {
+        let mut current = self.current.lock().expect("progress lock");
+        if let Some(bar) = current.take() {
+            bar.finish();
+        }
+        let bar = ProgressBar::new(total);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar.set_message(name.to_string());
+        *current = Some(bar);
+    }
+
+    fn advance(&self, n: u64) {
+        if let Some(bar) = self.current.lock().expect("progress lock").as_ref() {
+            bar.inc(n);
+        }
+    }
+}

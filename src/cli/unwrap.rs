@@ -1,0 +1,153 @@
+//! `organtex unwrap IN -o OUT.obj`: Seamster cut + ABF++ flattening.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use organtex::mesh::repair::make_manifold;
+use organtex::mesh::{Topology, io};
+use organtex::unwrap::visibility::Viewpoints;
+use organtex::unwrap::{UnwrapOptions, debug, unwrap};
+use organtex::{Error, Result};
+
+use super::progress::Bars;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Mesh to unwrap (.obj, .ply or .stl).
+    input: PathBuf,
+    /// Output .obj with the new uvs (uv units are mesh units: uv area equals
+    /// surface area).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the report (charts, distortion figures, timings) as JSON.
+    #[arg(long, value_name = "JSON")]
+    report: Option<PathBuf>,
+    /// Also write pictures here: visibility.png (the mesh coloured by how
+    /// visible it is, seams black, terminals yellow), checker.png (the mesh
+    /// textured with a checker through its uvs), uv_layout.png.
+    #[arg(long, value_name = "DIR")]
+    debug_dir: Option<PathBuf>,
+    /// Orthographic views, spread over a sphere around the mesh, from which
+    /// seam visibility is counted.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    views: u32,
+    /// Count visibility from these camera positions instead (an endoscope
+    /// inside a cavity): a text file with one "x y z" per line, each camera
+    /// looking all around.
+    #[arg(long, value_name = "FILE")]
+    cameras: Option<PathBuf>,
+    /// Refine the seams until the mean |log area ratio| of the flattening is
+    /// at most this.
+    #[arg(long, default_value_t = 0.22, value_name = "X")]
+    max_stretch: f64,
+    /// Split non-manifold edges and vertices first instead of refusing the
+    /// mesh.
+    #[arg(long)]
+    repair: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if !(args.max_stretch > 0.0 && args.max_stretch.is_finite()) {
+        return Err(Error::invalid(format!(
+            "--max-stretch must be a positive number, not {}",
+            args.max_stretch
+        )));
+    }
+    let mut mesh = io::read(&args.input)?;
+    if args.repair {
+        mesh = make_manifold(&mesh).0;
+    } else {
+        Topology::build(&mesh).map_err(|e| e.in_file(&args.input))?;
+    }
+    let mut opts = UnwrapOptions::default();
+    opts.seams.max_stretch = args.max_stretch;
+    opts.viewpoints = match &args.cameras {
+        Some(file) => Viewpoints::Cameras(read_cameras(file)?),
+        None => Viewpoints::Orbit {
+            views: args.views as usize,
+        },
+    };
+    let bars = Bars::new();
+    let result = unwrap(&mesh, &opts, &bars).map_err(|e| e.in_file(&args.input))?;
+    bars.finish();
+
+    io::write_obj(&args.output, &result.mesh, None)?;
+    let report = serde_json::to_string_pretty(&result.report).expect("the report serialises");
+    if let Some(path) = &args.report {
+        organtex::atomic::write_file(path, |w| writeln!(w, "{report}"))?;
+    }
+    if let Some(dir) = &args.debug_dir {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        save(
+            &dir.join("visibility.png"),
+            &debug::visibility_image(&result, 512),
+        )?;
+        if let Some(img) = debug::checker_image(&result.mesh, 512) {
+            save(&dir.join("checker.png"), &img)?;
+        }
+        if let Some(img) = debug::layout_image(&result.mesh, 1024) {
+            save(&dir.join("uv_layout.png"), &img)?;
+        }
+    }
+    let m = &result.report.metrics;
+    println!(
+        "{}: {} charts, {} flips, conf_mean {:.4}, area_log {:.3}, seam_ratio {:.2}, seam_vis {:.2}, {:.2} s",
+        args.output.display(),
+        m.charts,
+        m.flips,
+        m.conf_mean,
+        m.area_log,
+        m.seam_ratio,
+        m.seam_vis,
+        result.report.timings.total_s
+    );
+    Ok(())
+}
+
+/// Camera positions: one "x y z" per line; blank lines and # comments
+/// skipped.
+fn read_cameras(path: &Path) -> Result<Vec<DVec3>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut cameras = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let numbers: Vec<f64> = line
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|w| !w.is_empty())
+            .map(|w| w.parse::<f64>().ok().filter(|x| x.is_finite()))
+            .collect::<Option<_>>()
+            .ok_or_else(|| {
+                Error::at_line(path, n + 1, format!("'{line}' is not three finite numbers"))
+            })?;
+        match numbers.as_slice() {
+            [x, y, z] => cameras.push(DVec3::new(*x, *y, *z)),
+            _ => {
+                return Err(Error::at_line(
+                    path,
+                    n + 1,
+                    format!(
+                        "expected a camera position 'x y z', found {} numbers",
+                        numbers.len()
+                    ),
+                ));
+            }
+        }
+    }
+    if cameras.is_empty() {
+        return Err(Error::format(path, "no camera positions"));
+    }
+    Ok(cameras)
+}
+
+fn save(path: &Path, img: &image::RgbImage) -> Result<()> {
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::invalid(format!("{}: cannot encode PNG: {e}", path.display())))?;
+    organtex::atomic::write_file(path, |w| w.write_all(&bytes))
+}

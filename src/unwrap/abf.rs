@@ -1,0 +1,422 @@
+//! ABF++: angle-based flattening (Sheffer, Lévy, Mogilnitsky, Bogomyakov
+//! 2005) of a disk-shaped chart.
+//!
+//! Unknowns: the planar angle alpha of every corner. Targets beta: the 3D
+//! angles, scaled around interior vertices to sum to 2 pi, clamped to
+//! [1, 179] degrees. Energy: sum (alpha - beta)^2 / beta^2, subject to
+//! - triangle: the angles of each face sum to pi;
+//! - planarity: the angles around each interior vertex sum to 2 pi;
+//! - wheel (length): around each interior vertex, sum log sin of the angles
+//!   after the vertex equals that of the angles before it (law of sines
+//!   around the wheel; the log form of the paper's product).
+//!
+//! Newton on the Lagrangian. Every constraint is a sum of functions of
+//! single angles, so the Hessian in alpha is diagonal (2/beta^2 plus the
+//! wheel terms' lambda/sin^2, kept positive), and ABF++'s two eliminations
+//! apply: the angle block (diagonal), then the triangle block (one row per
+//! face), leaving one sparse SPD system of size 2 x interior vertices, solved
+//! by sparse Cholesky (`linalg`). Steps are halved only while they would
+//! leave (0, pi).
+
+use std::f64::consts::{PI, TAU};
+
+use crate::error::{Error, Result};
+use crate::linalg::SpdPattern;
+use crate::mesh::curvature::corner_angles;
+use crate::mesh::{Topology, TriMesh, VertexId};
+
+const MIN_ANGLE: f64 = PI / 180.0;
+const MAX_ANGLE: f64 = PI - PI / 180.0;
+
+#[derive(Clone, Debug)]
+pub struct AbfOptions {
+    pub max_iterations: usize,
+    /// Converged when every constraint and every component of the
+    /// Lagrangian's gradient is below this.
+    pub tolerance: f64,
+}
+
+impl Default for AbfOptions {
+    fn default() -> Self {
+        AbfOptions {
+            max_iterations: 30,
+            tolerance: 1e-9,
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct AbfSolution {
+    /// Planar angle of every corner.
+    pub angles: Vec<[f64; 3]>,
+    pub iterations: usize,
+    /// Largest constraint or gradient component at the end.
+    pub residual: f64,
+}
+
+/// Constraint rows of a vertex: planarity at 2k, wheel at 2k + 1, for the
+/// k-th interior vertex.
+struct Rows {
+    of_vertex: Vec<u32>,
+    count: usize,
+}
+
+const NOT_INTERIOR: u32 = u32::MAX;
+
+impl Rows {
+    fn new(topo: &Topology) -> Rows {
+        let mut k = 0;
+        let of_vertex = (0..topo.num_vertices())
+            .map(|v| {
+                let v = VertexId::from(v);
+                if topo.is_referenced(v) && !topo.is_boundary_vertex(v) {
+                    k += 1;
+                    k - 1
+                } else {
+                    NOT_INTERIOR
+                }
+            })
+            .collect();
+        Rows {
+            of_vertex,
+            count: k as usize,
+        }
+    }
+    /// Global rows of the six local slots of a triangle (plan, wheel per
+    /// corner), `None` for boundary vertices.
+    fn slots(&self, t: &[u32; 3]) -> [Option<u32>; 6] {
+        let mut s = [None; 6];
+        for i in 0..3 {
+            let k = self.of_vertex[t[i] as usize];
+            if k != NOT_INTERIOR {
+                s[2 * i] = Some(2 * k);
+                s[2 * i + 1] = Some(2 * k + 1);
+            }
+        }
+        s
+    }
+}
+
+/// The Jacobian column of corner `i` of a triangle over its six local
+/// slots: planarity of its own vertex, +cot on the wheel of the vertex
+/// before it (it is that vertex's "next" angle), -cot on the wheel of the
+/// vertex after it.
+#[inline]
+fn jacobian_column(i: usize, cot: f64) -> [f64; 6] {
+    let mut j = [0.0; 6];
+    j[2 * i] = 1.0;
+    j[2 * ((i + 2) % 3) + 1] = cot;
+    j[2 * ((i + 1) % 3) + 1] = -cot;
+    j
+}
+
+/// The fixed data of one flattening: faces, constraint rows, targets and
+/// weights.
+struct Problem<'a> {
+    tris: &'a [[u32; 3]],
+    rows: Rows,
+    beta: Vec<[f64; 3]>,
+    weight: Vec<[f64; 3]>,
+}
+
+/// Angles and Lagrange multipliers (one per face, two per interior vertex).
+#[derive(Clone)]
+struct State {
+    alpha: Vec<[f64; 3]>,
+    lambda_tri: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
+/// The Lagrangian's gradient in every angle and every constraint's value.
+struct Residuals {
+    grad: Vec<[f64; 3]>,
+    c_tri: Vec<f64>,
+    c_vertex: Vec<f64>,
+}
+
+/// Flatten a disk-shaped chart's angles.
+pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSolution> {
+    let tris = &mesh.triangles;
+    let rows = Rows::new(topo);
+    let theta = corner_angles(mesh);
+
+    // Target angles: interior vertices' angles scaled to sum to 2 pi.
+    let mut sum_at = vec![0.0; mesh.num_vertices()];
+    for (t, a) in tris.iter().zip(&theta) {
+        for i in 0..3 {
+            sum_at[t[i] as usize] += a[i];
+        }
+    }
+    let beta: Vec<[f64; 3]> = tris
+        .iter()
+        .zip(&theta)
+        .map(|(t, a)| {
+            std::array::from_fn(|i| {
+                let v = t[i] as usize;
+                let scaled = if rows.of_vertex[v] != NOT_INTERIOR && sum_at[v] > 0.0 {
+                    a[i] * TAU / sum_at[v]
+                } else {
+                    a[i]
+                };
+                scaled.clamp(MIN_ANGLE, MAX_ANGLE)
+            })
+        })
+        .collect();
+    let weight = beta.iter().map(|b| b.map(|x| 1.0 / (x * x))).collect();
+    let problem = Problem {
+        tris,
+        rows,
+        weight,
+        beta,
+    };
+
+    // Sparsity of the reduced system: per face, the pairs of its slots.
+    let mut positions = Vec::with_capacity(tris.len() * 21);
+    for t in tris {
+        let s = problem.rows.slots(t);
+        for p in s.iter().flatten() {
+            for q in s.iter().flatten() {
+                if p >= q {
+                    positions.push((*p, *q));
+                }
+            }
+        }
+    }
+    let pattern = match problem.rows.count {
+        0 => None,
+        n => Some(SpdPattern::new(2 * n, &positions)?),
+    };
+
+    let mut state = State {
+        alpha: problem.beta.clone(),
+        lambda_tri: vec![0.0; tris.len()],
+        lambda: vec![0.0; 2 * problem.rows.count],
+    };
+    let mut residual = problem.residual_norm(&state);
+    let mut iterations = 0;
+    let mut values = vec![0.0; positions.len()];
+    while residual > opts.tolerance {
+        if iterations == opts.max_iterations {
+            return Err(Error::invalid(format!(
+                "ABF++ did not converge in {iterations} Newton steps (residual {residual:.2e})"
+            )));
+        }
+        iterations += 1;
+        let step = problem.newton_step(&state, pattern.as_ref(), &mut values)?;
+        // Full Newton steps, as ABF++ takes them: the residual may rise on the
+        // first steps from a sliver-rich start and then falls fast, so a
+        // monotone line search would stall. Steps are only shortened to keep
+        // every angle inside (0, pi).
+        let mut s = 1.0;
+        loop {
+            let trial = state.plus(&step, s);
+            if trial.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
+                state = trial;
+                break;
+            }
+            s *= 0.5;
+            if s < 1e-4 {
+                return Err(Error::invalid(format!(
+                    "ABF++ could not keep the angles valid after {iterations} Newton steps"
+                )));
+            }
+        }
+        residual = problem.residual_norm(&state);
+        if !residual.is_finite() || residual > 1e6 {
+            return Err(Error::invalid(format!(
+                "ABF++ diverged after {iterations} Newton steps (residual {residual:.2e})"
+            )));
+        }
+    }
+    Ok(AbfSolution {
+        angles: state.alpha,
+        iterations,
+        residual,
+    })
+}
+
+/// What eliminating one face's angles and triangle constraint leaves
+/// behind: the inverse Hessian of its angles, their Jacobian columns over
+/// the face's six vertex-constraint slots, b = J2 H^-1 J1^T, A = J1 H^-1
+/// J1^T, and the face's reduced residual r1.
+struct FaceElimination {
+    inv_h: [f64; 3],
+    cols: [[f64; 6]; 3],
+    b: [f64; 6],
+    a: f64,
+    r1: f64,
+}
+
+/// A Newton direction: changes of every angle and multiplier.
+type Step = State;
+
+impl State {
+    fn plus(&self, step: &Step, s: f64) -> State {
+        let add = |x: &[f64], d: &[f64]| x.iter().zip(d).map(|(x, d)| x + s * d).collect();
+        State {
+            alpha: self
+                .alpha
+                .iter()
+                .zip(&step.alpha)
+                .map(|(a, d)| std::array::from_fn(|i| a[i] + s * d[i]))
+                .collect(),
+            lambda_tri: add(&self.lambda_tri, &step.lambda_tri),
+            lambda: add(&self.lambda, &step.lambda),
+        }
+    }
+}
+
+impl Problem<'_> {
+    fn residuals(&self, x: &State) -> Residuals {
+        let mut c_tri = vec![0.0; self.tris.len()];
+        let mut c_vertex = vec![0.0; x.lambda.len()];
+        for k in 0..x.lambda.len() / 2 {
+            c_vertex[2 * k] = -TAU;
+        }
+        let mut grad = Vec::with_capacity(self.tris.len());
+        for (f, t) in self.tris.iter().enumerate() {
+            let slots = self.rows.slots(t);
+            let a = x.alpha[f];
+            c_tri[f] = a[0] + a[1] + a[2] - PI;
+            let mut g = [0.0; 3];
+            for i in 0..3 {
+                let j = jacobian_column(i, a[i].cos() / a[i].sin());
+                g[i] = 2.0 * self.weight[f][i] * (a[i] - self.beta[f][i]) + x.lambda_tri[f];
+                for (slot, &coef) in j.iter().enumerate() {
+                    if let Some(r) = slots[slot] {
+                        g[i] += coef * x.lambda[r as usize];
+                    }
+                }
+                if let Some(r) = slots[2 * i] {
+                    c_vertex[r as usize] += a[i];
+                }
+                let log_sin = a[i].sin().ln();
+                if let Some(r) = slots[2 * ((i + 2) % 3) + 1] {
+                    c_vertex[r as usize] += log_sin;
+                }
+                if let Some(r) = slots[2 * ((i + 1) % 3) + 1] {
+                    c_vertex[r as usize] -= log_sin;
+                }
+            }
+            grad.push(g);
+        }
+        Residuals {
+            grad,
+            c_tri,
+            c_vertex,
+        }
+    }
+
+    /// Largest constraint value or gradient component, the gradient measured
+    /// in angle units (divided by its weight 2/beta^2).
+    fn residual_norm(&self, x: &State) -> f64 {
+        let r = self.residuals(x);
+        let g = r
+            .grad
+            .iter()
+            .zip(&self.weight)
+            .flat_map(|(g, w)| (0..3).map(move |i| g[i] / (2.0 * w[i])));
+        g.chain(r.c_tri.iter().copied())
+            .chain(r.c_vertex.iter().copied())
+            .fold(0.0f64, |m, x| m.max(x.abs()))
+    }
+
+    /// One Newton step on the Lagrangian, with ABF++'s two eliminations.
+    fn newton_step(
+        &self,
+        x: &State,
+        pattern: Option<&SpdPattern>,
+        values: &mut [f64],
+    ) -> Result<Step> {
+        let Residuals {
+            grad,
+            c_tri,
+            c_vertex,
+        } = self.residuals(x);
+        let mut rhs = c_vertex;
+        let mut faces: Vec<FaceElimination> = Vec::with_capacity(self.tris.len());
+        let mut next_value = 0;
+        for (f, t) in self.tris.iter().enumerate() {
+            let slots = self.rows.slots(t);
+            let a = x.alpha[f];
+            let mut e = FaceElimination {
+                inv_h: [0.0; 3],
+                cols: [[0.0; 6]; 3],
+                b: [0.0; 6],
+                a: 0.0,
+                r1: c_tri[f],
+            };
+            for i in 0..3 {
+                let (s, c) = a[i].sin_cos();
+                let mut col = jacobian_column(i, c / s);
+                for (slot, x) in col.iter_mut().enumerate() {
+                    if slots[slot].is_none() {
+                        *x = 0.0;
+                    }
+                }
+                // d^2/da^2 log sin a = -1/sin^2 a, with the wheel's signs;
+                // kept at least half the energy's curvature so the reduced
+                // system stays positive definite.
+                let wheel_before =
+                    slots[2 * ((i + 2) % 3) + 1].map_or(0.0, |r| x.lambda[r as usize]);
+                let wheel_after =
+                    slots[2 * ((i + 1) % 3) + 1].map_or(0.0, |r| x.lambda[r as usize]);
+                let h = 2.0 * self.weight[f][i] + (wheel_after - wheel_before) / (s * s);
+                e.inv_h[i] = 1.0 / h.max(self.weight[f][i]);
+                e.cols[i] = col;
+                e.a += e.inv_h[i];
+                e.r1 -= e.inv_h[i] * grad[f][i];
+                for (slot, &coef) in col.iter().enumerate() {
+                    e.b[slot] += e.inv_h[i] * coef;
+                    if let Some(r) = slots[slot] {
+                        // r2 = c - J2 H^-1 g
+                        rhs[r as usize] -= e.inv_h[i] * grad[f][i] * coef;
+                    }
+                }
+            }
+            // Schur complement block, in the pattern's order.
+            for p in 0..6 {
+                for q in 0..6 {
+                    if let (Some(r), Some(c)) = (slots[p], slots[q])
+                        && r >= c
+                    {
+                        let cross: f64 = (0..3)
+                            .map(|i| e.inv_h[i] * e.cols[i][p] * e.cols[i][q])
+                            .sum();
+                        values[next_value] = cross - e.b[p] * e.b[q] / e.a;
+                        next_value += 1;
+                    }
+                }
+            }
+            // rhs2 = r2 - b r1 / A
+            for (slot, row) in slots.iter().enumerate() {
+                if let Some(r) = row {
+                    rhs[*r as usize] -= e.b[slot] * e.r1 / e.a;
+                }
+            }
+            faces.push(e);
+        }
+        let mut d_lambda = rhs;
+        if let Some(pattern) = pattern {
+            pattern.factor(values)?.solve(&mut d_lambda);
+        }
+        let mut step = State {
+            alpha: vec![[0.0; 3]; self.tris.len()],
+            lambda_tri: vec![0.0; self.tris.len()],
+            lambda: Vec::new(),
+        };
+        for (f, t) in self.tris.iter().enumerate() {
+            let slots = self.rows.slots(t);
+            let e = &faces[f];
+            let local: [f64; 6] =
+                std::array::from_fn(|slot| slots[slot].map_or(0.0, |r| d_lambda[r as usize]));
+            let dot = |v: &[f64; 6]| v.iter().zip(&local).map(|(x, y)| x * y).sum::<f64>();
+            let d_tri = (e.r1 - dot(&e.b)) / e.a;
+            step.lambda_tri[f] = d_tri;
+            step.alpha[f] =
+                std::array::from_fn(|i| -e.inv_h[i] * (grad[f][i] + d_tri + dot(&e.cols[i])));
+        }
+        step.lambda = d_lambda;
+        Ok(step)
+    }
+}

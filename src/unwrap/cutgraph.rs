@@ -1,0 +1,118 @@
+//! The cut graph: handle loops for surfaces with genus, and cutting a mesh
+//! open along seams into disk-shaped charts.
+//!
+//! Handle loops come from a tree-cotree decomposition (Eppstein 2003) with
+//! Erickson and Whittlesey's greedy choice (2005): a shortest-path tree T
+//! from a root, a maximum spanning tree C of the dual over the edges not in
+//! T, weighted by the length of the loop each edge closes through T; the 2g
+//! edges in neither close the shortest system of loops through the root.
+//! Boundary loops join the dual as one node each, so the decomposition
+//! treats a surface with holes like the closed surface with the holes
+//! capped, and yields only its 2g handle loops.
+
+use super::graph::{EdgeGraph, ShortestPaths};
+use crate::error::{Error, Result};
+use crate::mesh::dsu::DisjointSets;
+use crate::mesh::edges::EdgeTable;
+use crate::mesh::fans::{corner_fans, split_by_fans};
+use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
+
+/// Edges of the 2g shortest handle loops through `root` (empty for genus 0).
+pub fn handle_loops(
+    topo: &Topology,
+    graph: &EdgeGraph,
+    cost: &[f64],
+    root: VertexId,
+) -> Vec<EdgeId> {
+    let tree = ShortestPaths::from_sources(graph, cost, &[(root, 0)]);
+    let mut in_tree = vec![false; graph.num_edges()];
+    for e in tree.via.iter().flatten() {
+        in_tree[e.idx()] = true;
+    }
+    // Dual nodes: faces, then one per boundary loop.
+    let nf = topo.num_faces();
+    let mut loop_of_halfedge = std::collections::HashMap::new();
+    for (l, cycle) in topo.boundary_loops().iter().enumerate() {
+        for &h in cycle {
+            loop_of_halfedge.insert(h, nf + l);
+        }
+    }
+    let dual_ends = |e: EdgeId| {
+        let h = topo.edge_halfedge(e);
+        let a = topo.face(h).idx();
+        let b = match topo.twin(h) {
+            Some(t) => topo.face(t).idx(),
+            None => loop_of_halfedge[&h],
+        };
+        (a, b)
+    };
+    let loop_length = |e: EdgeId| {
+        let [a, b] = graph.ends(e);
+        tree.distance[a.idx()] + cost[e.idx()] + tree.distance[b.idx()]
+    };
+    let mut dual: Vec<EdgeId> = (0..graph.num_edges())
+        .map(EdgeId::from)
+        .filter(|e| !in_tree[e.idx()])
+        .collect();
+    // Longest loops into the cotree first, leaving the shortest out.
+    dual.sort_by(|&x, &y| loop_length(y).total_cmp(&loop_length(x)).then(x.cmp(&y)));
+    let mut sets = DisjointSets::new(nf + topo.boundary_loops().len());
+    let mut loops = Vec::new();
+    for e in dual {
+        let (a, b) = dual_ends(e);
+        if sets.find(a) != sets.find(b) {
+            sets.union(a, b);
+        } else {
+            let [u, v] = graph.ends(e);
+            loops.push(e);
+            loops.extend(tree.path_to_source(graph, u));
+            loops.extend(tree.path_to_source(graph, v));
+        }
+    }
+    loops.sort_unstable();
+    loops.dedup();
+    loops
+}
+
+/// A mesh cut open: the cut triangles index cut vertices, and `origin`
+/// maps each cut vertex to the vertex of the uncut mesh it copies.
+#[derive(Clone, Debug)]
+pub struct Cut {
+    pub triangles: Vec<[u32; 3]>,
+    pub origin: Vec<u32>,
+}
+
+/// Cut `mesh` open along `seams`: each vertex splits into one copy per
+/// wedge of faces between seams.
+pub fn cut(mesh: &TriMesh, seams: &[EdgeId]) -> Cut {
+    let table = EdgeTable::new(&mesh.triangles);
+    let mut is_seam = vec![false; table.num_edges()];
+    for e in seams {
+        is_seam[e.idx()] = true;
+    }
+    let (fans, count) = corner_fans(&mesh.triangles, &table, |hs| {
+        hs.len() == 2 && !is_seam[table.edge_of(hs[0]).idx()]
+    });
+    let mut triangles = mesh.triangles.clone();
+    let split_from = split_by_fans(&mut triangles, mesh.num_vertices(), &fans, count);
+    let origin = (0..mesh.num_vertices() as u32).chain(split_from).collect();
+    Cut { triangles, origin }
+}
+
+/// Fail unless every connected piece of the cut mesh is a topological disk:
+/// one boundary loop and Euler characteristic 1.
+pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
+    let cut_positions = cut.origin.iter().map(|&v| positions[v as usize]).collect();
+    let cut_mesh = TriMesh::new(cut_positions, cut.triangles.clone());
+    let topo = Topology::build(&cut_mesh)?;
+    let comps = Components::find(&topo);
+    for (i, c) in comps.topology(&topo).iter().enumerate() {
+        if c.euler != 1 || c.boundary_loops != 1 {
+            return Err(Error::invalid(format!(
+                "cutting left chart {i} with {} boundary loops and Euler characteristic {} instead of a disk",
+                c.boundary_loops, c.euler
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,136 @@
+//! From angles to uv coordinates (ABF++ section 5): each triangle's angles
+//! fix its shape up to similarity; the uvs making every triangle as similar
+//! as possible to its shape are found by least squares with two vertices
+//! pinned, as in LSCM (Lévy, Petitjean, Ray, Maillot 2002). Fed the 3D
+//! angles instead of ABF++'s, this is LSCM itself, the fallback.
+//!
+//! Per triangle with reference shape q0, q1, q2 (complex) and uvs u0, u1,
+//! u2, the map is conformal when sum_j (q_{j+2} - q_{j+1}) u_j = 0; the
+//! residual is weighted by 1/sqrt(2 area) so each triangle counts by area.
+
+use glam::{DVec2, DVec3};
+
+use crate::error::Result;
+use crate::linalg::SpdPattern;
+use crate::mesh::{Topology, TriMesh, VertexId};
+
+/// Uvs of a disk-shaped chart whose corners should have `angles`.
+pub fn from_angles(mesh: &TriMesh, topo: &Topology, angles: &[[f64; 3]]) -> Result<Vec<DVec2>> {
+    let n = mesh.num_vertices();
+    let (pin_a, pin_b) = pins(mesh, topo);
+    let pinned_uv = |v: usize| {
+        if v == pin_a {
+            Some(DVec2::ZERO)
+        } else if v == pin_b {
+            Some(DVec2::new(
+                (mesh.positions[pin_b] - mesh.positions[pin_a]).length(),
+                0.0,
+            ))
+        } else {
+            None
+        }
+    };
+    // Free unknowns: x and y of every other referenced vertex.
+    let mut free = vec![u32::MAX; n];
+    let mut count = 0u32;
+    for (v, slot) in free.iter_mut().enumerate() {
+        if v != pin_a && v != pin_b && topo.is_referenced(VertexId::from(v)) {
+            *slot = count;
+            count += 1;
+        }
+    }
+    let unknowns = 2 * count as usize;
+
+    let mut positions = Vec::with_capacity(mesh.num_faces() * 21);
+    let mut values = Vec::with_capacity(mesh.num_faces() * 21);
+    let mut rhs = vec![0.0; unknowns];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let rows = conformality_rows(mesh, f, angles[f]);
+        // Columns: (x, y) of each corner.
+        let column = |k: usize| {
+            let v = t[k / 2] as usize;
+            (free[v] != u32::MAX).then(|| 2 * free[v] + (k % 2) as u32)
+        };
+        for row in &rows {
+            let known: f64 = (0..6)
+                .filter_map(|k| pinned_uv(t[k / 2] as usize).map(|uv| row[k] * uv[k % 2]))
+                .sum();
+            for p in 0..6 {
+                let Some(r) = column(p) else { continue };
+                rhs[r as usize] -= row[p] * known;
+                for q in 0..6 {
+                    if let Some(c) = column(q)
+                        && r >= c
+                    {
+                        positions.push((r, c));
+                        values.push(row[p] * row[q]);
+                    }
+                }
+            }
+        }
+    }
+    let pattern = SpdPattern::new(unknowns, &positions)?;
+    pattern.factor(&values)?.solve(&mut rhs);
+    Ok((0..n)
+        .map(|v| {
+            pinned_uv(v).unwrap_or_else(|| {
+                if free[v] == u32::MAX {
+                    DVec2::ZERO
+                } else {
+                    DVec2::new(rhs[2 * free[v] as usize], rhs[2 * free[v] as usize + 1])
+                }
+            })
+        })
+        .collect())
+}
+
+/// The two real rows (over x0, y0, x1, y1, x2, y2) of face `f`'s
+/// conformality residual for a triangle with the given angles, sized like
+/// the 3D triangle.
+fn conformality_rows(mesh: &TriMesh, f: usize, a: [f64; 3]) -> [[f64; 6]; 2] {
+    let [p0, p1, _] = mesh.corners(f);
+    let scale = (p1 - p0).length().max(1e-300);
+    let q = [
+        DVec2::ZERO,
+        DVec2::new(scale, 0.0),
+        DVec2::new(a[0].cos(), a[0].sin()) * scale * a[1].sin() / a[2].sin().max(1e-12),
+    ];
+    let double_area = (q[1] - q[0]).perp_dot(q[2] - q[0]).abs().max(1e-300);
+    let norm = 1.0 / double_area.sqrt();
+    let mut re = [0.0; 6];
+    let mut im = [0.0; 6];
+    for j in 0..3 {
+        let w = (q[(j + 2) % 3] - q[(j + 1) % 3]) * norm;
+        // (a + ib)(x + iy) = (ax - by) + i(bx + ay)
+        re[2 * j] = w.x;
+        re[2 * j + 1] = -w.y;
+        im[2 * j] = w.y;
+        im[2 * j + 1] = w.x;
+    }
+    [re, im]
+}
+
+/// Two boundary vertices far apart to pin (any two vertices if the chart
+/// has no boundary, which a chart never lacks).
+fn pins(mesh: &TriMesh, topo: &Topology) -> (usize, usize) {
+    let boundary: Vec<usize> = match topo.boundary_loops().first() {
+        Some(cycle) => cycle.iter().map(|&h| topo.origin(h).idx()).collect(),
+        None => (0..mesh.num_vertices())
+            .filter(|&v| topo.is_referenced(VertexId::from(v)))
+            .collect(),
+    };
+    let far_from = |from: DVec3| {
+        *boundary
+            .iter()
+            .max_by(|&&a, &&b| {
+                (mesh.positions[a] - from)
+                    .length_squared()
+                    .total_cmp(&(mesh.positions[b] - from).length_squared())
+                    .then(b.cmp(&a))
+            })
+            .expect("a chart has vertices")
+    };
+    let a = far_from(mesh.positions[boundary[0]]);
+    let b = far_from(mesh.positions[a]);
+    (a, b)
+}

@@ -1,0 +1,317 @@
+//! Unwrapping: cut a surface along hidden seams into disk-shaped charts
+//! (Seamster) and flatten each with ABF++ (seed 004, section 3.4).
+//!
+//! `unwrap(mesh)` runs the whole stage: visibility over the whole mesh (so
+//! pieces hide each other), then for every connected piece its seams, its
+//! cut and its flattening, one chart per piece; the charts are scaled so uv
+//! area equals 3D area (uv units are mesh units, ready for a tileable
+//! texture with a world-space tile size) and placed side by side.
+
+pub mod abf;
+pub mod conformal;
+pub mod cutgraph;
+pub mod debug;
+pub mod flatten;
+pub mod graph;
+pub mod layout;
+pub mod metrics;
+pub mod seamster;
+pub mod steiner;
+pub mod terminals;
+pub mod visibility;
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use glam::DVec2;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::mesh::submesh::extract;
+use crate::mesh::{Components, EdgeId, FaceId, Topology, TriMesh, UvLayer, VertexId};
+use crate::progress::{CancelOnly, Progress};
+use abf::AbfOptions;
+use flatten::Method;
+use metrics::UvMetrics;
+use seamster::SeamOptions;
+use visibility::{Viewpoints, Visibility};
+
+#[derive(Clone, Debug)]
+pub struct UnwrapOptions {
+    pub viewpoints: Viewpoints,
+    pub seams: SeamOptions,
+    pub abf: AbfOptions,
+}
+
+impl Default for UnwrapOptions {
+    fn default() -> Self {
+        UnwrapOptions {
+            viewpoints: Viewpoints::Orbit { views: 128 },
+            seams: SeamOptions::default(),
+            abf: AbfOptions::default(),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ChartReport {
+    pub faces: usize,
+    pub genus: i64,
+    pub boundary_loops: usize,
+    pub terminals: usize,
+    pub refinement_rounds: usize,
+    pub seam_edges: usize,
+    pub flattening: Method,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    pub visibility_s: f64,
+    pub seams_s: f64,
+    pub flatten_s: f64,
+    pub total_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct UnwrapReport {
+    pub views: usize,
+    pub charts: Vec<ChartReport>,
+    pub metrics: UvMetrics,
+    pub timings: Timings,
+}
+
+/// A mesh with its new uv layer, and what was decided on the way.
+pub struct Unwrapped {
+    /// The input mesh with `uvs` set: one chart per connected piece.
+    pub mesh: TriMesh,
+    pub topology: Topology,
+    /// Edges cut open (by the input's topology).
+    pub seams: Vec<EdgeId>,
+    pub terminals: Vec<VertexId>,
+    pub visibility: Visibility,
+    pub report: UnwrapReport,
+}
+
+/// One connected piece, unwrapped, in the piece's own numbering.
+struct PieceResult {
+    faces: Vec<FaceId>,
+    origin: Vec<u32>,
+    cut_triangles: Vec<[u32; 3]>,
+    uv: Vec<DVec2>,
+    seams: Vec<[u32; 2]>,
+    terminals: Vec<u32>,
+    report: ChartReport,
+    seams_s: f64,
+    flatten_s: f64,
+}
+
+/// Cut `mesh` into disk charts and flatten them. The mesh must be manifold
+/// (see `mesh::repair`).
+pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions, progress: &dyn Progress) -> Result<Unwrapped> {
+    let start = Instant::now();
+    let topology = Topology::build(mesh)?;
+    let visibility = visibility::compute(mesh, &topology, &opts.viewpoints, progress);
+    let visibility_s = start.elapsed().as_secs_f64();
+
+    let components = Components::find(&topology);
+    let mut faces_of: Vec<Vec<FaceId>> = vec![Vec::new(); components.count];
+    for (f, &c) in components.of_face.iter().enumerate() {
+        faces_of[c as usize].push(FaceId::from(f));
+    }
+    let edge_index: HashMap<[u32; 2], EdgeId> = (0..topology.num_edges())
+        .map(|e| {
+            let [a, b] = topology.edge_vertices(EdgeId::from(e));
+            ([a.0.min(b.0), a.0.max(b.0)], EdgeId::from(e))
+        })
+        .collect();
+    // One piece reports its stages; many report one step per piece.
+    let many = faces_of.len() > 1;
+    let quiet = CancelOnly(progress);
+    let piece_progress: &dyn Progress = if many { &quiet } else { progress };
+    if many {
+        progress.stage("charts", faces_of.len() as u64);
+    }
+    let pieces: Vec<PieceResult> = faces_of
+        .into_par_iter()
+        .map(|faces| {
+            let piece = unwrap_piece(mesh, faces, &visibility, &edge_index, opts, piece_progress);
+            if many {
+                progress.advance(1);
+            }
+            piece
+        })
+        .collect::<Result<_>>()?;
+
+    // One uv layer: every piece's cut vertices, charts side by side.
+    let offsets = pack(&pieces);
+    let mut coords = Vec::new();
+    let mut uv_triangles = vec![[0u32; 3]; mesh.num_faces()];
+    let mut seams = Vec::new();
+    let mut terminals = Vec::new();
+    let mut timings = Timings {
+        visibility_s,
+        ..Timings::default()
+    };
+    for (piece, offset) in pieces.iter().zip(offsets) {
+        let base = coords.len() as u32;
+        coords.extend(piece.uv.iter().map(|&u| u + offset));
+        for (k, f) in piece.faces.iter().enumerate() {
+            uv_triangles[f.idx()] = piece.cut_triangles[k].map(|v| v + base);
+        }
+        for [a, b] in &piece.seams {
+            let (a, b) = (piece.origin[*a as usize], piece.origin[*b as usize]);
+            seams.push(edge_index[&[a.min(b), a.max(b)]]);
+        }
+        terminals.extend(
+            piece
+                .terminals
+                .iter()
+                .map(|&t| VertexId(piece.origin[t as usize])),
+        );
+        timings.seams_s += piece.seams_s;
+        timings.flatten_s += piece.flatten_s;
+    }
+    seams.sort_unstable();
+    let mut out = mesh.clone();
+    out.uvs = Some(UvLayer {
+        coords,
+        triangles: uv_triangles,
+    });
+    let metrics =
+        metrics::measure(&out, &topology, &visibility.edge).expect("the uv layer was just set");
+    timings.total_s = start.elapsed().as_secs_f64();
+    Ok(Unwrapped {
+        report: UnwrapReport {
+            views: visibility.views,
+            charts: pieces.into_iter().map(|p| p.report).collect(),
+            metrics,
+            timings,
+        },
+        mesh: out,
+        topology,
+        seams,
+        terminals,
+        visibility,
+    })
+}
+
+fn unwrap_piece(
+    mesh: &TriMesh,
+    faces: Vec<FaceId>,
+    visibility: &Visibility,
+    edge_index: &HashMap<[u32; 2], EdgeId>,
+    opts: &UnwrapOptions,
+    progress: &dyn Progress,
+) -> Result<PieceResult> {
+    let t0 = Instant::now();
+    let (piece, origin) = extract(mesh, &faces);
+    let topo = Topology::build(&piece)?;
+    let vertex_visibility: Vec<f32> = origin
+        .iter()
+        .map(|&v| visibility.vertex[v as usize])
+        .collect();
+    let edge_visibility: Vec<f32> = (0..topo.num_edges())
+        .map(|e| {
+            let [a, b] = topo.edge_vertices(EdgeId::from(e)).map(|v| origin[v.idx()]);
+            visibility.edge[edge_index[&[a.min(b), a.max(b)]].idx()]
+        })
+        .collect();
+    let component = Components::find(&topo).topology(&topo)[0].clone();
+    let seams = seamster::choose(
+        &piece,
+        &topo,
+        &vertex_visibility,
+        &edge_visibility,
+        visibility.views,
+        &opts.seams,
+        progress,
+    )?;
+    let seams_s = t0.elapsed().as_secs_f64();
+
+    let t1 = Instant::now();
+    progress.stage("flatten", 1);
+    let chart = TriMesh::new(
+        seams
+            .cut
+            .origin
+            .iter()
+            .map(|&v| piece.positions[v as usize])
+            .collect(),
+        seams.cut.triangles.clone(),
+    );
+    let chart_topo = Topology::build(&chart)?;
+    let flat = flatten::flatten(&chart, &chart_topo, &opts.abf)?;
+    let uv = normalise(&chart, flat.uv);
+    let flatten_s = t1.elapsed().as_secs_f64();
+    progress.advance(1);
+
+    Ok(PieceResult {
+        report: ChartReport {
+            faces: faces.len(),
+            genus: component.genus,
+            boundary_loops: component.boundary_loops,
+            terminals: seams.terminals.len(),
+            refinement_rounds: seams.rounds,
+            seam_edges: seams.edges.len(),
+            flattening: flat.method,
+        },
+        faces,
+        seams: seams
+            .edges
+            .iter()
+            .map(|&e| topo.edge_vertices(e).map(|v| v.0))
+            .collect(),
+        terminals: seams.terminals.iter().map(|t| t.0).collect(),
+        cut_triangles: seams.cut.triangles,
+        origin,
+        uv,
+        seams_s,
+        flatten_s,
+    })
+}
+
+/// Scale a chart's uvs so its uv area equals its 3D area, and move its
+/// lower-left corner to the origin.
+fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
+    let uv_area: f64 = chart
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| uv[v as usize]);
+            ((b - a).perp_dot(c - a) / 2.0).abs()
+        })
+        .sum();
+    let scale = (chart.area() / uv_area.max(1e-300)).sqrt();
+    let lo = uv
+        .iter()
+        .fold(DVec2::splat(f64::INFINITY), |m, &u| m.min(u));
+    uv.into_iter().map(|u| (u - lo) * scale).collect()
+}
+
+/// Place charts left to right in rows (shelf packing), tallest first, with
+/// a margin: returns each chart's offset.
+fn pack(pieces: &[PieceResult]) -> Vec<DVec2> {
+    let size = |p: &PieceResult| p.uv.iter().fold(DVec2::ZERO, |m, &u| m.max(u));
+    let sizes: Vec<DVec2> = pieces.iter().map(size).collect();
+    let total_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
+    let row_width = total_area
+        .sqrt()
+        .max(sizes.iter().map(|s| s.x).fold(0.0, f64::max));
+    let margin = 0.02 * row_width;
+    let mut order: Vec<usize> = (0..pieces.len()).collect();
+    order.sort_by(|&a, &b| sizes[b].y.total_cmp(&sizes[a].y).then(a.cmp(&b)));
+    let mut offsets = vec![DVec2::ZERO; pieces.len()];
+    let (mut x, mut y, mut row_height) = (0.0, 0.0, 0.0f64);
+    for i in order {
+        if x > 0.0 && x + sizes[i].x > row_width {
+            x = 0.0;
+            y += row_height + margin;
+            row_height = 0.0;
+        }
+        offsets[i] = DVec2::new(x, y);
+        x += sizes[i].x + margin;
+        row_height = row_height.max(sizes[i].y);
+    }
+    offsets
+}

@@ -1,0 +1,374 @@
+//! Seamster (Sheffer and Hart 2002; seed 004, section 3.4.1): choose the
+//! seams that cut one connected surface into a disk, hidden where nobody
+//! looks and passing where the curvature is.
+//!
+//! 1. Terminals (`terminals`): cone regions, whose angle defect summed over
+//!    a small disc is large (they stretch area when left uncut), and sharp
+//!    vertices, whose own defect is large (ABF++ must bend every angle
+//!    around them when left uncut).
+//! 2. Handle loops if the surface has genus (`cutgraph::handle_loops`).
+//! 3. A Steiner tree joining terminals, boundary loops and handle loops
+//!    (`steiner`), edge cost |e| * visibility * (1 - curvature), curvature
+//!    being |dihedral angle| / pi.
+//! 4. Refinement, as Seamster grows its cut: estimate the flattening's area
+//!    stretch (`conformal`), take the points conformally farthest from the
+//!    cut (largest |log scale|) as new terminals, and join each to the cut by
+//!    its cheapest path, the cost discounted where the scale is off so the
+//!    new branch runs through the region it relieves; until the stretch
+//!    target or a round cap.
+//!
+//! Scales are relative to the surface (sqrt of its area, its mean edge), so
+//! the same settings serve a bunny, a bone and a uterus.
+
+use std::f64::consts::PI;
+
+use super::conformal;
+use super::cutgraph::{Cut, assert_disks, cut, handle_loops};
+use super::graph::{EdgeGraph, ShortestPaths};
+use super::steiner;
+use super::terminals::{disc_curvature, select};
+use crate::error::Result;
+use crate::mesh::curvature::Curvature;
+use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
+use crate::progress::{Progress, check};
+
+#[derive(Clone, Debug)]
+pub struct SeamOptions {
+    /// Stop refining once the estimated mean |log area ratio| (the area_log
+    /// figure) is at most this.
+    pub max_stretch: f64,
+    /// At most this many refinement rounds.
+    pub max_rounds: usize,
+    /// New terminals per refinement round.
+    pub terminals_per_round: usize,
+    /// A cone terminal: angle defect summed over its disc at least this
+    /// (radians).
+    pub cone_threshold: f64,
+    /// A sharp terminal: its own angle defect at least this (radians).
+    pub sharp_threshold: f64,
+}
+
+impl Default for SeamOptions {
+    fn default() -> Self {
+        SeamOptions {
+            max_stretch: 0.22,
+            max_rounds: 16,
+            terminals_per_round: 2,
+            cone_threshold: 1.5,
+            sharp_threshold: 0.7,
+        }
+    }
+}
+
+/// The seams chosen for one connected surface.
+#[derive(Clone, Debug)]
+pub struct Seams {
+    /// Interior edges to cut.
+    pub edges: Vec<EdgeId>,
+    pub terminals: Vec<VertexId>,
+    /// Refinement rounds run.
+    pub rounds: usize,
+    /// Estimated mean |log area ratio| of the final cut's flattening.
+    pub estimated_area_log: f64,
+    pub cut: Cut,
+}
+
+/// What every step of the search shares about the surface.
+struct Surface<'a> {
+    mesh: &'a TriMesh,
+    topo: &'a Topology,
+    graph: EdgeGraph,
+    length: Vec<f64>,
+    /// Steiner edge cost: length x visibility x (1 - curvature).
+    cost: Vec<f64>,
+}
+
+impl Surface<'_> {
+    fn interior(&self, v: VertexId) -> bool {
+        self.topo.is_referenced(v) && !self.topo.is_boundary_vertex(v)
+    }
+
+    fn boundary_vertices(&self) -> impl Iterator<Item = VertexId> + '_ {
+        self.topo
+            .boundary_loops()
+            .iter()
+            .flatten()
+            .map(|&h| self.topo.origin(h))
+    }
+}
+
+/// Choose seams for a connected, manifold surface. `edge_visibility` is by
+/// `topo`'s edges; `views` is how many views it was counted over.
+pub fn choose(
+    mesh: &TriMesh,
+    topo: &Topology,
+    vertex_visibility: &[f32],
+    edge_visibility: &[f32],
+    views: usize,
+    opts: &SeamOptions,
+    progress: &dyn Progress,
+) -> Result<Seams> {
+    let graph = EdgeGraph::new(topo);
+    let length: Vec<f64> = (0..graph.num_edges())
+        .map(|e| {
+            let [a, b] = graph.ends(EdgeId::from(e));
+            (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
+        })
+        .collect();
+    let curvature = Curvature::compute(mesh, topo);
+    // Never-seen edges still cost their length, a little.
+    let hidden = 1.0 / views.max(1) as f64;
+    let cost = (0..graph.num_edges())
+        .map(|e| {
+            length[e]
+                * (edge_visibility[e] as f64 + hidden)
+                * (1.0 - curvature.dihedral[e].abs() / PI)
+        })
+        .collect();
+    let s = Surface {
+        mesh,
+        topo,
+        graph,
+        length,
+        cost,
+    };
+
+    let mean_edge = s.length.iter().sum::<f64>() / s.length.len().max(1) as f64;
+    let radius = (0.05 * mesh.area().sqrt()).max(mean_edge);
+    let spacing = 2.0 * radius;
+    let defect: Vec<f64> = (0..mesh.num_vertices())
+        .map(|v| {
+            if s.interior(VertexId::from(v)) {
+                curvature.angle_defect[v]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let cone = disc_curvature(&s.graph, &mesh.positions, &defect, radius);
+    let interior = |v: VertexId| s.interior(v);
+    let mut terminals = select(
+        &s.graph,
+        &mesh.positions,
+        &cone,
+        spacing,
+        opts.cone_threshold,
+        &[],
+        interior,
+    );
+    let sharpness: Vec<f64> = defect.iter().map(|d| d.abs()).collect();
+    let sharp = select(
+        &s.graph,
+        &mesh.positions,
+        &sharpness,
+        0.0,
+        opts.sharp_threshold,
+        &terminals,
+        interior,
+    );
+    terminals.extend(sharp);
+
+    let genus = Components::find(topo)
+        .topology(topo)
+        .first()
+        .map_or(0, |c| c.genus);
+    let loops = if genus > 0 {
+        // Root the loops where the surface is least visible.
+        let root = (0..mesh.num_vertices())
+            .map(VertexId::from)
+            .filter(|&v| topo.is_referenced(v))
+            .min_by(|a, b| {
+                vertex_visibility[a.idx()]
+                    .total_cmp(&vertex_visibility[b.idx()])
+                    .then(a.cmp(b))
+            })
+            .expect("a surface has vertices");
+        handle_loops(topo, &s.graph, &s.cost, root)
+    } else {
+        Vec::new()
+    };
+    if genus == 0 && topo.boundary_loops().is_empty() && terminals.len() < 2 {
+        terminals = two_far_terminals(&s, &cone, terminals.first().copied());
+    }
+
+    progress.stage("seams", opts.max_rounds as u64 + 1);
+    let mut edges = steiner_seams(&s, &terminals, &loops);
+    let mut rounds = 0;
+    loop {
+        check(progress)?;
+        let cut = cut(mesh, &edges);
+        assert_disks(&cut, &mesh.positions)?;
+        let (log_scale, area_log) = estimate_stretch(mesh, &cut)?;
+        progress.advance(1);
+        let added = if area_log <= opts.max_stretch || rounds >= opts.max_rounds {
+            Vec::new()
+        } else {
+            farthest_from_cut(
+                &s,
+                &edges,
+                &terminals,
+                &log_scale,
+                spacing,
+                opts.terminals_per_round,
+            )
+        };
+        if added.is_empty() {
+            return Ok(Seams {
+                edges,
+                terminals,
+                rounds,
+                estimated_area_log: area_log,
+                cut,
+            });
+        }
+        edges = grow(&s, edges, &terminals, &added, &log_scale);
+        terminals.extend(added);
+        rounds += 1;
+    }
+}
+
+/// A closed sphere needs at least one seam edge, so two terminals: the
+/// strongest cone (or `first`), and the vertex farthest from it.
+fn two_far_terminals(s: &Surface, cone: &[f64], first: Option<VertexId>) -> Vec<VertexId> {
+    let interior: Vec<VertexId> = (0..s.mesh.num_vertices())
+        .map(VertexId::from)
+        .filter(|&v| s.interior(v))
+        .collect();
+    let first = first.unwrap_or_else(|| {
+        *interior
+            .iter()
+            .max_by(|a, b| cone[a.idx()].total_cmp(&cone[b.idx()]).then(b.cmp(a)))
+            .expect("a closed surface has interior vertices")
+    });
+    let distance = ShortestPaths::from_sources(&s.graph, &s.length, &[(first, 0)]).distance;
+    let far = *interior
+        .iter()
+        .filter(|v| distance[v.idx()].is_finite())
+        .max_by(|a, b| {
+            distance[a.idx()]
+                .total_cmp(&distance[b.idx()])
+                .then(b.cmp(a))
+        })
+        .expect("a closed surface has interior vertices");
+    vec![first, far]
+}
+
+/// Interior edges of the Steiner tree joining the terminals, the boundary
+/// loops and the handle loops, plus the handle loops themselves.
+fn steiner_seams(s: &Surface, terminals: &[VertexId], loops: &[EdgeId]) -> Vec<EdgeId> {
+    let mut groups: Vec<Vec<VertexId>> = terminals.iter().map(|&t| vec![t]).collect();
+    for cycle in s.topo.boundary_loops() {
+        groups.push(cycle.iter().map(|&h| s.topo.origin(h)).collect());
+    }
+    if !loops.is_empty() {
+        let mut on_loops: Vec<VertexId> = loops.iter().flat_map(|&e| s.graph.ends(e)).collect();
+        on_loops.sort_unstable();
+        on_loops.dedup();
+        groups.push(on_loops);
+    }
+    let mut edges = steiner::tree(&s.graph, &s.cost, &groups);
+    edges.extend_from_slice(loops);
+    interior_only(s, edges)
+}
+
+fn interior_only(s: &Surface, mut edges: Vec<EdgeId>) -> Vec<EdgeId> {
+    edges.retain(|&e| !s.topo.is_boundary_edge(e));
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+/// Vertices already on the cut: seam ends, terminals, boundary vertices.
+fn on_cut(s: &Surface, edges: &[EdgeId], terminals: &[VertexId]) -> Vec<(VertexId, u32)> {
+    edges
+        .iter()
+        .flat_map(|&e| s.graph.ends(e))
+        .chain(terminals.iter().copied())
+        .chain(s.boundary_vertices())
+        .map(|v| (v, 0))
+        .collect()
+}
+
+/// Up to `count` vertices where the log scale is largest in magnitude, each
+/// at least `spacing` from the cut and from each other.
+fn farthest_from_cut(
+    s: &Surface,
+    edges: &[EdgeId],
+    terminals: &[VertexId],
+    log_scale: &[f64],
+    spacing: f64,
+    count: usize,
+) -> Vec<VertexId> {
+    let distance =
+        ShortestPaths::from_sources(&s.graph, &s.length, &on_cut(s, edges, terminals)).distance;
+    let badness: Vec<f64> = log_scale
+        .iter()
+        .zip(&distance)
+        .map(|(u, d)| if *d >= spacing { u.abs() } else { 0.0 })
+        .collect();
+    let mut picked = select(
+        &s.graph,
+        &s.mesh.positions,
+        &badness,
+        spacing,
+        f64::MIN_POSITIVE,
+        &[],
+        |v| s.interior(v),
+    );
+    picked.truncate(count);
+    picked
+}
+
+/// The cut grown by a path from each new terminal to it (the cut so far,
+/// branches added before included). Path costs are the Steiner costs times
+/// e^-|log scale|: a branch prefers the distorted region it is to relieve.
+fn grow(
+    s: &Surface,
+    mut edges: Vec<EdgeId>,
+    terminals: &[VertexId],
+    added: &[VertexId],
+    log_scale: &[f64],
+) -> Vec<EdgeId> {
+    let discounted: Vec<f64> = (0..s.graph.num_edges())
+        .map(|e| {
+            let [a, b] = s.graph.ends(EdgeId::from(e));
+            s.cost[e] * (-(log_scale[a.idx()].abs() + log_scale[b.idx()].abs()) / 2.0).exp()
+        })
+        .collect();
+    for &t in added {
+        let paths =
+            ShortestPaths::from_sources(&s.graph, &discounted, &on_cut(s, &edges, terminals));
+        edges.extend(paths.path_to_source(&s.graph, t));
+    }
+    interior_only(s, edges)
+}
+
+/// The log scale factor of the cut surface's least-distortion conformal
+/// flattening (`conformal`), per vertex of the uncut surface (0 on the cut),
+/// and the area_log figure it implies.
+fn estimate_stretch(mesh: &TriMesh, cut: &Cut) -> Result<(Vec<f64>, f64)> {
+    let chart = TriMesh::new(
+        cut.origin
+            .iter()
+            .map(|&v| mesh.positions[v as usize])
+            .collect(),
+        cut.triangles.clone(),
+    );
+    let chart_topo = Topology::build(&chart)?;
+    let u = conformal::log_scale(&chart, &chart_topo)?;
+    let mut area_log = 0.0;
+    let mut area = 0.0;
+    for (f, l) in conformal::face_log_area_ratios(&chart, &u)
+        .iter()
+        .enumerate()
+    {
+        let a = chart.face_area(f);
+        area_log += a * l.abs();
+        area += a;
+    }
+    let mut per_vertex = vec![0.0; mesh.num_vertices()];
+    for (c, &v) in cut.origin.iter().enumerate() {
+        per_vertex[v as usize] = u[c];
+    }
+    Ok((per_vertex, area_log / area.max(1e-300)))
+}

@@ -1,0 +1,488 @@
+//! How visible each vertex and edge is (seed 004, section 3.4.1; Seamster):
+//! the fraction of views from which it is seen, with depth-buffered
+//! rendering. Two kinds of viewpoint:
+//! - `Viewpoints::Orbit`: orthographic views from directions spread evenly
+//!   over the sphere (a Fibonacci lattice), for organs seen from outside;
+//! - `Viewpoints::Cameras`: perspective views from given positions (an
+//!   endoscope inside a cavity), each looking all around (a cube map of six
+//!   90-degree views).
+//!
+//! A point counts as seen in a view when its depth is within a small
+//! tolerance (three pixels' worth) of the depth buffer at its pixel. Views
+//! render in parallel; counts are integers, so the result does not depend
+//! on the thread count.
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use crate::mesh::{EdgeId, Topology, TriMesh};
+use crate::progress::Progress;
+use crate::raster;
+
+#[derive(Clone, Debug)]
+pub enum Viewpoints {
+    /// `views` orthographic directions on a Fibonacci sphere.
+    Orbit { views: usize },
+    /// Perspective cube maps from these positions.
+    Cameras(Vec<DVec3>),
+}
+
+#[derive(Clone, Debug)]
+pub struct Visibility {
+    /// Fraction of views that see each vertex.
+    pub vertex: Vec<f32>,
+    /// Fraction of views that see each edge's midpoint, by `EdgeId`.
+    pub edge: Vec<f32>,
+    pub views: usize,
+}
+
+/// `n` unit directions spread evenly over the sphere (Fibonacci lattice).
+pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f64 / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f64;
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// A projection of world points to pixel coordinates and a depth (smaller
+/// is nearer); `None` when the point is outside the view.
+pub(crate) trait Camera: Sync {
+    fn resolution(&self) -> usize;
+    /// Pixel position and depth of a point in front of the camera.
+    fn project(&self, p: DVec3) -> Option<(DVec2, f64)>;
+    /// Whether depths interpolate as 1/z (perspective) or linearly.
+    fn perspective(&self) -> bool;
+    /// World size of a pixel at `depth`.
+    fn pixel_size(&self, depth: f64) -> f64;
+
+    /// Whether the triangle's corners, as given, can be projected (all in
+    /// front of the near plane).
+    fn in_front(&self, p: DVec3) -> bool;
+}
+
+pub(crate) struct Orthographic {
+    right: DVec3,
+    up: DVec3,
+    pub(crate) forward: DVec3,
+    center: DVec3,
+    radius: f64,
+    res: usize,
+}
+
+impl Orthographic {
+    /// Looking at the sphere (`center`, `radius`) from direction `dir`,
+    /// `res` pixels square.
+    pub(crate) fn from_direction(dir: DVec3, center: DVec3, radius: f64, res: usize) -> Self {
+        let (right, up) = basis(dir);
+        Orthographic {
+            right,
+            up,
+            forward: -dir,
+            center,
+            radius,
+            res,
+        }
+    }
+}
+
+impl Camera for Orthographic {
+    fn resolution(&self) -> usize {
+        self.res
+    }
+    fn project(&self, p: DVec3) -> Option<(DVec2, f64)> {
+        let d = p - self.center;
+        let scale = self.res as f64 / (2.0 * self.radius);
+        let px = DVec2::new(
+            d.dot(self.right) + self.radius,
+            d.dot(self.up) + self.radius,
+        ) * scale;
+        Some((px, d.dot(self.forward)))
+    }
+    fn perspective(&self) -> bool {
+        false
+    }
+    fn pixel_size(&self, _depth: f64) -> f64 {
+        2.0 * self.radius / self.res as f64
+    }
+
+    fn in_front(&self, _p: DVec3) -> bool {
+        true
+    }
+}
+
+/// One 90-degree face of a cube map around `origin`.
+struct CubeFace {
+    origin: DVec3,
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    near: f64,
+    res: usize,
+}
+
+impl Camera for CubeFace {
+    fn resolution(&self) -> usize {
+        self.res
+    }
+    fn project(&self, p: DVec3) -> Option<(DVec2, f64)> {
+        let d = p - self.origin;
+        let z = d.dot(self.forward);
+        if z < self.near {
+            return None;
+        }
+        let half = self.res as f64 / 2.0;
+        Some((
+            DVec2::new(
+                d.dot(self.right) / z * half + half,
+                d.dot(self.up) / z * half + half,
+            ),
+            z,
+        ))
+    }
+    fn perspective(&self) -> bool {
+        true
+    }
+    fn pixel_size(&self, depth: f64) -> f64 {
+        2.0 * depth / self.res as f64
+    }
+
+    fn in_front(&self, p: DVec3) -> bool {
+        (p - self.origin).dot(self.forward) >= self.near
+    }
+}
+
+/// Nearest depth per pixel, and the face it belongs to (`u32::MAX` for
+/// background).
+pub(crate) struct DepthBuffer {
+    pub res: usize,
+    pub depth: Vec<f32>,
+    pub face: Vec<u32>,
+}
+
+impl DepthBuffer {
+    pub(crate) fn render(camera: &dyn Camera, mesh: &TriMesh) -> DepthBuffer {
+        let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
+        Self::render_projected(camera, mesh, &projected)
+    }
+
+    /// Render with every vertex already projected (`None` when behind a
+    /// perspective camera's near plane).
+    pub(crate) fn render_projected(
+        camera: &dyn Camera,
+        mesh: &TriMesh,
+        projected: &[Option<(DVec2, f64)>],
+    ) -> DepthBuffer {
+        let res = camera.resolution();
+        let mut depth = vec![f32::INFINITY; res * res];
+        let mut face = vec![u32::MAX; res * res];
+        let perspective = camera.perspective();
+        let mut draw = |f: usize, [a, b, c]: [(DVec2, f64); 3]| {
+            let z = [a.1, b.1, c.1];
+            raster::triangle([a.0, b.0, c.0], res, res, |x, y, w| {
+                let d = if perspective {
+                    1.0 / (w[0] / z[0] + w[1] / z[1] + w[2] / z[2])
+                } else {
+                    w[0] * z[0] + w[1] * z[1] + w[2] * z[2]
+                } as f32;
+                let i = y * res + x;
+                if d < depth[i] {
+                    depth[i] = d;
+                    face[i] = f as u32;
+                }
+            });
+        };
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if let [Some(a), Some(b), Some(c)] = t.map(|v| projected[v as usize]) {
+                draw(f, [a, b, c]);
+            } else {
+                for tri in clip_to_front(camera, mesh.corners(f)) {
+                    if let [Some(a), Some(b), Some(c)] = tri.map(|p| camera.project(p)) {
+                        draw(f, [a, b, c]);
+                    }
+                }
+            }
+        }
+        DepthBuffer { res, depth, face }
+    }
+
+    /// Whether a point on the surface, seen at pixel position and depth
+    /// `at`, is the nearest thing at its pixel: within half a pixel of the
+    /// depth drawn there (a flat neighbour), or the face drawn there is one
+    /// of its own. Comparing faces rather than adding slope-dependent depth
+    /// slack keeps points just past a silhouette from counting as seen.
+    pub(crate) fn sees(
+        &self,
+        camera: &dyn Camera,
+        at: (DVec2, f64),
+        own: impl Fn(u32) -> bool,
+    ) -> Option<bool> {
+        let (px, d) = at;
+        // A point on the border between two cube faces may land a rounding
+        // error outside both: allow half a pixel.
+        let n = self.res as f64;
+        if px.x < -0.5 || px.y < -0.5 || px.x >= n + 0.5 || px.y >= n + 0.5 {
+            return None;
+        }
+        let clamp = |x: f64| (x.max(0.0) as usize).min(self.res - 1);
+        let i = clamp(px.y) * self.res + clamp(px.x);
+        Some(d <= self.depth[i] as f64 + 0.5 * camera.pixel_size(d) || own(self.face[i]))
+    }
+}
+
+/// The parts of a triangle in front of a perspective camera's near plane
+/// (Sutherland-Hodgman against one plane: at most a quad, two triangles).
+fn clip_to_front(camera: &dyn Camera, corners: [DVec3; 3]) -> Vec<[DVec3; 3]> {
+    let inside = corners.map(|p| camera.in_front(p));
+    let mut poly: Vec<DVec3> = Vec::with_capacity(4);
+    for i in 0..3 {
+        let (p, q) = (corners[i], corners[(i + 1) % 3]);
+        if inside[i] {
+            poly.push(p);
+        }
+        if inside[i] != inside[(i + 1) % 3] {
+            // Bisect for the crossing: the camera only answers in/out.
+            let (mut lo, mut hi) = if inside[i] { (p, q) } else { (q, p) };
+            for _ in 0..40 {
+                let mid = (lo + hi) / 2.0;
+                if camera.in_front(mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            poly.push(lo);
+        }
+    }
+    (1..poly.len().saturating_sub(1))
+        .map(|k| [poly[0], poly[k], poly[k + 1]])
+        .collect()
+}
+
+/// Visibility of every vertex and edge of `mesh` from `viewpoints`.
+pub fn compute(
+    mesh: &TriMesh,
+    topo: &Topology,
+    viewpoints: &Viewpoints,
+    progress: &dyn Progress,
+) -> Visibility {
+    let (lo, hi) = mesh.bounding_box().unwrap_or((DVec3::ZERO, DVec3::ONE));
+    let center = (lo + hi) / 2.0;
+    let radius = ((hi - lo).length() / 2.0).max(1e-12);
+    let mean_edge = mean_edge_length(mesh, topo).max(radius * 1e-4);
+    // Pixels about half an edge wide, so each vertex has its own pixel.
+    let res = ((2.0 * radius / (0.5 * mean_edge)).ceil() as usize).clamp(64, 1024);
+    let edge_ends: Vec<[usize; 2]> = (0..topo.num_edges())
+        .map(|e| topo.edge_vertices(EdgeId::from(e)).map(|v| v.idx()))
+        .collect();
+    let midpoints: Vec<DVec3> = edge_ends
+        .iter()
+        .map(|&[a, b]| (mesh.positions[a] + mesh.positions[b]) / 2.0)
+        .collect();
+
+    // Each viewpoint: the cameras that make it up.
+    let viewpoint_cameras: Vec<Vec<Box<dyn Camera>>> = match viewpoints {
+        Viewpoints::Orbit { views } => fibonacci_sphere((*views).max(1))
+            .into_iter()
+            .map(|dir| {
+                vec![
+                    Box::new(Orthographic::from_direction(dir, center, radius, res))
+                        as Box<dyn Camera>,
+                ]
+            })
+            .collect(),
+        Viewpoints::Cameras(positions) => positions
+            .iter()
+            .map(|&origin| {
+                [
+                    DVec3::X,
+                    -DVec3::X,
+                    DVec3::Y,
+                    -DVec3::Y,
+                    DVec3::Z,
+                    -DVec3::Z,
+                ]
+                .into_iter()
+                .map(|forward| {
+                    let (right, up) = basis(-forward);
+                    Box::new(CubeFace {
+                        origin,
+                        right,
+                        up,
+                        forward,
+                        near: radius * 1e-4,
+                        res: res.min(512),
+                    }) as Box<dyn Camera>
+                })
+                .collect()
+            })
+            .collect(),
+    };
+    progress.stage("visibility", viewpoint_cameras.len() as u64);
+
+    let vertex_faces = |v: usize| {
+        topo.outgoing(crate::mesh::VertexId::from(v))
+            .map(|h| topo.face(h).0)
+    };
+    let edge_faces = |e: usize| {
+        let h = topo.edge_halfedge(EdgeId::from(e));
+        [Some(topo.face(h).0), topo.twin(h).map(|t| topo.face(t).0)]
+    };
+    let nv = mesh.num_vertices();
+    let ne = topo.num_edges();
+    // One viewpoint: which vertices and edges any of its cameras sees.
+    let render_viewpoint = |cams: &Vec<Box<dyn Camera>>| {
+        let mut vertex_seen = vec![false; nv];
+        let mut edge_seen = vec![false; ne];
+        for camera in cams {
+            let camera = camera.as_ref();
+            let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
+            let buffer = DepthBuffer::render_projected(camera, mesh, &projected);
+            for (v, seen) in vertex_seen.iter_mut().enumerate() {
+                if !*seen && let Some(at) = projected[v] {
+                    *seen =
+                        buffer.sees(camera, at, |f| vertex_faces(v).any(|g| g == f)) == Some(true);
+                }
+            }
+            for (e, seen) in edge_seen.iter_mut().enumerate() {
+                if *seen {
+                    continue;
+                }
+                // Orthographic projection is affine: the midpoint projects to
+                // the mean of its ends.
+                let [a, b] = edge_ends[e];
+                let at = if camera.perspective() {
+                    camera.project(midpoints[e])
+                } else {
+                    projected[a]
+                        .zip(projected[b])
+                        .map(|(p, q)| ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0))
+                };
+                if let Some(at) = at {
+                    *seen =
+                        buffer.sees(camera, at, |f| edge_faces(e).contains(&Some(f))) == Some(true);
+                }
+            }
+        }
+        progress.advance(1);
+        (vertex_seen, edge_seen)
+    };
+    let (vertex_hits, edge_hits) = viewpoint_cameras
+        .par_iter()
+        .map(render_viewpoint)
+        .fold(
+            || (vec![0u32; nv], vec![0u32; ne]),
+            |(mut vc, mut ec), (v, e)| {
+                add_hits(&mut vc, &v);
+                add_hits(&mut ec, &e);
+                (vc, ec)
+            },
+        )
+        .reduce(
+            || (vec![0u32; nv], vec![0u32; ne]),
+            |(mut va, mut ea), (vb, eb)| {
+                va.iter_mut().zip(&vb).for_each(|(a, b)| *a += b);
+                ea.iter_mut().zip(&eb).for_each(|(a, b)| *a += b);
+                (va, ea)
+            },
+        );
+    let views = viewpoint_cameras.len().max(1);
+    let fraction = |c: &u32| *c as f32 / views as f32;
+    Visibility {
+        vertex: vertex_hits.iter().map(fraction).collect(),
+        edge: edge_hits.iter().map(fraction).collect(),
+        views,
+    }
+}
+
+fn add_hits(counts: &mut [u32], hits: &[bool]) {
+    for (c, &h) in counts.iter_mut().zip(hits) {
+        *c += h as u32;
+    }
+}
+
+/// Two unit vectors completing `dir` to a right-handed orthonormal basis.
+fn basis(dir: DVec3) -> (DVec3, DVec3) {
+    let helper = if dir.z.abs() < 0.9 {
+        DVec3::Z
+    } else {
+        DVec3::X
+    };
+    let right = helper.cross(dir).normalize();
+    let up = dir.cross(right);
+    (right, up)
+}
+
+pub fn mean_edge_length(mesh: &TriMesh, topo: &Topology) -> f64 {
+    let total: f64 = (0..topo.num_edges())
+        .map(|e| {
+            let [a, b] = topo.edge_vertices(EdgeId::from(e));
+            (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
+        })
+        .sum();
+    total / topo.num_edges().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::shapes::{icosphere, open_cylinder};
+    use crate::progress::Silent;
+
+    #[test]
+    fn fibonacci_directions_are_unit_and_balanced() {
+        let dirs = fibonacci_sphere(128);
+        assert!(dirs.iter().all(|d| (d.length() - 1.0).abs() < 1e-12));
+        assert!(
+            dirs.iter().sum::<DVec3>().length() < 1.0,
+            "no side favoured"
+        );
+    }
+
+    #[test]
+    fn a_convex_sphere_shows_each_point_to_half_the_orbit() {
+        // A polyhedral vertex is seen wherever one of its faces faces the
+        // view, a little more than half the sphere on a fine mesh.
+        let mesh = icosphere(5);
+        let topo = Topology::build(&mesh).unwrap();
+        let vis = compute(&mesh, &topo, &Viewpoints::Orbit { views: 200 }, &Silent);
+        for &v in &vis.vertex {
+            assert!((0.42..=0.58).contains(&v), "visibility {v}");
+        }
+    }
+
+    #[test]
+    fn a_camera_inside_a_closed_cylinder_sees_the_wall_and_an_outside_orbit_does_not_see_in() {
+        // An open tube seen from outside: the inner wall is hidden from most
+        // directions except along the axis.
+        let mesh = open_cylinder(1.0, 8.0, 48, 32);
+        let topo = Topology::build(&mesh).unwrap();
+        let inside = compute(
+            &mesh,
+            &topo,
+            &Viewpoints::Cameras(vec![DVec3::new(0.0, 0.0, 4.0)]),
+            &Silent,
+        );
+        let hidden: Vec<_> = inside
+            .vertex
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v < 1.0)
+            .map(|(i, _)| mesh.positions[i])
+            .collect();
+        assert!(
+            hidden.is_empty(),
+            "every wall point faces the axis: {hidden:?}"
+        );
+        let orbit = compute(&mesh, &topo, &Viewpoints::Orbit { views: 64 }, &Silent);
+        let mean: f32 = orbit.vertex.iter().sum::<f32>() / orbit.vertex.len() as f32;
+        assert!(
+            mean > 0.3 && mean < 0.7,
+            "outside of the tube seen from about half the views"
+        );
+    }
+}

@@ -12,6 +12,8 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::mesh::curvature::Curvature;
 use crate::mesh::{Components, Topology, io};
+use crate::progress::Silent;
+use crate::unwrap::{UnwrapOptions, unwrap};
 
 /// The timed step of a workload.
 pub type Step = Box<dyn FnMut() -> Result<()>>;
@@ -88,6 +90,16 @@ pub fn workloads() -> Vec<Workload> {
                     Components::find(&topo).topology(&topo);
                     Curvature::compute(&mesh, &topo);
                     Ok(())
+                }))
+            },
+        },
+        Workload {
+            name: "unwrap bunny",
+            what: "visibility, seams, ABF++ and layout, one chart (target: 1/4 of xatlas)",
+            prepare: |data| {
+                let mesh = io::read(&data.join("bunny.obj"))?;
+                Ok(Box::new(move || {
+                    unwrap(&mesh, &UnwrapOptions::default(), &Silent).map(drop)
                 }))
             },
         },

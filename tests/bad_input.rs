@@ -258,3 +258,103 @@ fn failed_curvature_export_leaves_no_file() {
     assert!(stderr.contains("missing/k.csv"), "{stderr}");
     assert!(!target.exists());
 }
+
+#[test]
+fn unwrap_refuses_bad_input_clearly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let fin = dir.path().join("fin.obj");
+    std::fs::write(
+        &fin,
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.obj");
+    let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj");
+    let (f, o, c) = (
+        fin.to_str().unwrap(),
+        out.to_str().unwrap(),
+        cube.to_str().unwrap(),
+    );
+
+    check_refused(
+        "non-manifold unwrap",
+        &fin,
+        "non-manifold edge (v0, v1)",
+        &["unwrap", f, "-o", o],
+    );
+    let (_, _, stderr) = organtex(&["unwrap", f, "-o", o]);
+    assert!(stderr.contains("--repair"), "{stderr}");
+
+    let cameras = dir.path().join("cams.txt");
+    std::fs::write(&cameras, b"# endoscope\n0 0 0\n1 two 3\n").unwrap();
+    let cams = cameras.to_str().unwrap();
+    check_refused(
+        "bad camera file",
+        &cameras,
+        "line 3: '1 two 3' is not three finite numbers",
+        &["unwrap", c, "-o", o, "--cameras", cams],
+    );
+    std::fs::write(&cameras, b"0 0\n").unwrap();
+    check_refused(
+        "short camera line",
+        &cameras,
+        "line 1: expected a camera position 'x y z', found 2 numbers",
+        &["unwrap", c, "-o", o, "--cameras", cams],
+    );
+
+    let (ok, _, stderr) = organtex(&["unwrap", c, "-o", o, "--max-stretch", "0"]);
+    assert!(
+        !ok && stderr.contains("--max-stretch must be a positive number"),
+        "{stderr}"
+    );
+
+    let nowhere = dir.path().join("missing/out.obj");
+    check_refused(
+        "output folder missing",
+        &nowhere,
+        "No such file",
+        &["unwrap", c, "-o", nowhere.to_str().unwrap()],
+    );
+    assert!(!out.exists(), "nothing was written by the failed runs");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(
+        leftovers
+            .iter()
+            .all(|n| !n.to_string_lossy().ends_with(".part")),
+        "{leftovers:?}"
+    );
+
+    // With --repair the same fin unwraps: three fins, three charts.
+    let (ok, stdout, stderr) = organtex(&["unwrap", f, "-o", o, "--repair"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("3 charts, 0 flips"), "{stdout}");
+}
+
+#[test]
+fn unwrap_gives_the_same_bytes_on_one_or_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny10k_textured.obj");
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("uv{threads}.obj"));
+        let status = Command::new(env!("CARGO_BIN_EXE_organtex"))
+            .args([
+                "unwrap",
+                bunny.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(status.status.success());
+        outputs.push(std::fs::read(out).unwrap());
+    }
+    assert!(
+        outputs[0] == outputs[1],
+        "same uvs whatever the thread count"
+    );
+}

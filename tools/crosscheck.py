@@ -23,29 +23,17 @@ Creates its own virtualenv under target/pyenv and installs pymeshlab there.
 import argparse
 import json
 import multiprocessing
-import os
 import subprocess
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-VENV = ROOT / "target" / "pyenv"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pyenv  # noqa: E402
+
+ROOT = pyenv.ROOT
 REQUIREMENTS = ["pymeshlab==2025.7.post1", "numpy"]
-
-
-def ensure_venv():
-    """Re-run this script inside target/pyenv, creating it when missing."""
-    if Path(sys.prefix).resolve() == VENV.resolve():
-        return
-    python = VENV / "bin" / "python"
-    if not python.exists():
-        print(f"crosscheck: creating {VENV} and installing {' '.join(REQUIREMENTS)}", flush=True)
-        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
-        subprocess.run([str(python), "-m", "pip", "install", "-q", "--upgrade", "pip"], check=True)
-        subprocess.run([str(python), "-m", "pip", "install", "-q", *REQUIREMENTS], check=True)
-    os.execv(str(python), [str(python), __file__, *sys.argv[1:]])
 
 
 FIN = """v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n"""
@@ -108,7 +96,7 @@ def compare_curvature(theirs, valence, csv):
 
 
 def main():
-    ensure_venv()
+    pyenv.ensure(REQUIREMENTS, __file__)
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()

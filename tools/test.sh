@@ -38,4 +38,7 @@ cargo clippy --release --all-targets -- -D warnings
 step "tools/crosscheck.py (organtex info vs pymeshlab)"
 python3 tools/crosscheck.py --organtex target/release/organtex
 
+step "tools/compare_uv.py --quick (organtex unwrap vs xatlas and pymeshlab)"
+python3 tools/compare_uv.py --quick --organtex target/release/organtex
+
 step "all checks passed"

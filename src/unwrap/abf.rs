@@ -420,3 +420,101 @@ impl Problem<'_> {
         Ok(step)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    /// Six triangles around a centre vertex lifted to height `h`.
+    fn hexagon_fan(h: f64) -> TriMesh {
+        let mut positions = vec![DVec3::new(0.0, 0.0, h)];
+        for k in 0..6 {
+            let a = std::f64::consts::TAU * k as f64 / 6.0;
+            positions.push(DVec3::new(a.cos(), a.sin(), 0.0));
+        }
+        let triangles = (0..6).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
+        TriMesh::new(positions, triangles)
+    }
+
+    fn solve_mesh(mesh: &TriMesh) -> AbfSolution {
+        let topo = Topology::build(mesh).unwrap();
+        solve(mesh, &topo, &AbfOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn a_flat_fan_keeps_its_angles() {
+        let mesh = hexagon_fan(0.0);
+        let solution = solve_mesh(&mesh);
+        for (a, t) in solution.angles.iter().zip(corner_angles(&mesh)) {
+            for i in 0..3 {
+                assert!((a[i] - t[i]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn a_cone_fan_opens_into_a_regular_hexagon() {
+        // Symmetry: the centre's six angles become 2 pi / 6 and every
+        // triangle equilateral, whatever the cone's height.
+        for h in [0.3, 1.0, 3.0] {
+            let solution = solve_mesh(&hexagon_fan(h));
+            assert!(solution.iterations > 0);
+            for a in &solution.angles {
+                for x in a {
+                    assert!((x - PI / 3.0).abs() < 1e-9, "h {h}: angle {x}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_cut_sphere_satisfies_every_constraint() {
+        let sphere = crate::mesh::shapes::icosphere(3);
+        // Cut along a chain of edges from one pole to the other.
+        let topo = Topology::build(&sphere).unwrap();
+        let graph = crate::unwrap::graph::EdgeGraph::new(&topo);
+        let length: Vec<f64> = (0..graph.num_edges())
+            .map(|e| {
+                let [a, b] = graph.ends(crate::mesh::EdgeId::from(e));
+                (sphere.positions[a.idx()] - sphere.positions[b.idx()]).length()
+            })
+            .collect();
+        let paths =
+            crate::unwrap::graph::ShortestPaths::from_sources(&graph, &length, &[(VertexId(0), 0)]);
+        let far = (0..sphere.num_vertices())
+            .max_by(|&a, &b| paths.distance[a].total_cmp(&paths.distance[b]))
+            .unwrap();
+        let seams = paths.path_to_source(&graph, VertexId::from(far));
+        let cut = crate::unwrap::cutgraph::cut(&sphere, &seams);
+        let chart = TriMesh::new(
+            cut.origin
+                .iter()
+                .map(|&v| sphere.positions[v as usize])
+                .collect(),
+            cut.triangles.clone(),
+        );
+        let chart_topo = Topology::build(&chart).unwrap();
+        let solution = solve(&chart, &chart_topo, &AbfOptions::default()).unwrap();
+        // Triangle sums, vertex sums and wheel products hold.
+        for a in &solution.angles {
+            assert!((a.iter().sum::<f64>() - PI).abs() < 1e-9);
+        }
+        let mut sum = vec![0.0; chart.num_vertices()];
+        let mut wheel = vec![0.0; chart.num_vertices()];
+        for (t, a) in chart.triangles.iter().zip(&solution.angles) {
+            for i in 0..3 {
+                sum[t[i] as usize] += a[i];
+                wheel[t[i] as usize] += a[(i + 1) % 3].sin().ln() - a[(i + 2) % 3].sin().ln();
+            }
+        }
+        for v in 0..chart.num_vertices() {
+            if !chart_topo.is_boundary_vertex(VertexId::from(v)) {
+                assert!((sum[v] - TAU).abs() < 1e-9);
+                assert!(wheel[v].abs() < 1e-9);
+            }
+        }
+        let uv = crate::unwrap::layout::from_angles(&chart, &chart_topo, &solution.angles).unwrap();
+        assert_eq!(crate::unwrap::flatten::flipped(&chart, &uv), 0);
+    }
+}

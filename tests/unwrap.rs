@@ -1,0 +1,197 @@
+//! Unwrapping real and generated meshes: one disk chart per piece, no flips,
+//! the distortion targets on the bunny, ABF++ against LSCM on a fixed cut,
+//! robustness to degenerate input, and determinism.
+
+use std::path::PathBuf;
+
+use glam::{DVec2, DVec3};
+use organtex::mesh::curvature::corner_angles;
+use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
+use organtex::mesh::{Components, Topology, TriMesh, io};
+use organtex::progress::Silent;
+use organtex::unwrap::metrics::jacobian;
+use organtex::unwrap::visibility::Viewpoints;
+use organtex::unwrap::{UnwrapOptions, Unwrapped, abf, flatten, layout, unwrap};
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn run(mesh: &TriMesh) -> Unwrapped {
+    unwrap(mesh, &UnwrapOptions::default(), &Silent).expect("unwrap")
+}
+
+/// Check from the output alone that every chart is a disk: glue faces by
+/// their uv corners and count pieces, boundary loops and Euler
+/// characteristic.
+fn assert_disk_charts(u: &Unwrapped, pieces: usize) {
+    let layer = u.mesh.uvs.as_ref().expect("uvs");
+    let uv_mesh = TriMesh::new(
+        layer
+            .coords
+            .iter()
+            .map(|c| DVec3::new(c.x, c.y, 0.0))
+            .collect(),
+        layer.triangles.clone(),
+    );
+    let topo = Topology::build(&uv_mesh).expect("the uv layout is a manifold");
+    let charts = Components::find(&topo).topology(&topo);
+    assert_eq!(charts.len(), pieces, "one chart per connected piece");
+    for c in &charts {
+        assert_eq!((c.euler, c.boundary_loops), (1, 1), "every chart is a disk");
+    }
+    assert_eq!(u.report.metrics.charts, pieces);
+    assert_eq!(u.report.metrics.flips, 0, "no flipped triangle");
+    assert!(layer.coords.iter().all(|c| c.is_finite()));
+}
+
+#[test]
+fn bunny_is_one_low_distortion_chart() {
+    let mesh = io::read(&data("bunny.obj")).unwrap();
+    let u = run(&mesh);
+    assert_disk_charts(&u, 1);
+    let m = &u.report.metrics;
+    assert!(m.conf_mean <= 1.02, "conf_mean {}", m.conf_mean);
+    assert!(m.area_log <= 0.25, "area_log {}", m.area_log);
+    // Seams hide: on average they are less visible than the surface.
+    let mean_vis: f64 =
+        u.visibility.vertex.iter().map(|&v| v as f64).sum::<f64>() / mesh.num_vertices() as f64;
+    assert!(
+        m.seam_vis / m.seam_ratio < mean_vis,
+        "seams are less visible than the average surface point"
+    );
+}
+
+#[test]
+fn every_topology_becomes_disks_without_flips() {
+    let cases: Vec<(&str, TriMesh)> = vec![
+        ("torus", torus(1.0, 0.35, 64, 24)),
+        ("double torus", holed_slab(2, 4, 4)),
+        ("open cylinder", open_cylinder(0.5, 1.5, 48, 16)),
+        ("cube", io::read(&data("cube.obj")).unwrap()),
+        (
+            "bunny with five holes",
+            io::read(&data("bunny10k_textured.obj")).unwrap(),
+        ),
+    ];
+    for (name, mesh) in cases {
+        let u = run(&mesh);
+        println!("{name}: {:?}", u.report.metrics);
+        assert_disk_charts(&u, 1);
+    }
+}
+
+#[test]
+fn the_cube_unfolds_without_distortion() {
+    // Every corner is a cone of pi/2: cut through all of them, the faces
+    // unfold flat and keep their shape.
+    let u = run(&io::read(&data("cube.obj")).unwrap());
+    assert!(u.report.metrics.conf_mean < 1.0 + 1e-9);
+    assert!(u.report.metrics.area_log < 1e-9);
+}
+
+#[test]
+fn separate_pieces_get_separate_charts_side_by_side() {
+    let mut mesh = icosphere(3);
+    let other = torus(1.0, 0.3, 32, 12);
+    let offset = mesh.num_vertices() as u32;
+    mesh.positions
+        .extend(other.positions.iter().map(|p| *p + DVec3::X * 4.0));
+    mesh.triangles
+        .extend(other.triangles.iter().map(|t| t.map(|v| v + offset)));
+    let u = run(&mesh);
+    assert_disk_charts(&u, 2);
+    // Their uv bounding boxes do not overlap.
+    let layer = u.mesh.uvs.as_ref().unwrap();
+    let bounds = |faces: std::ops::Range<usize>| {
+        faces.flat_map(|f| layer.triangles[f]).fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| {
+                (
+                    lo.min(layer.coords[v as usize]),
+                    hi.max(layer.coords[v as usize]),
+                )
+            },
+        )
+    };
+    let n = icosphere(3).num_faces();
+    let (a, b) = (bounds(0..n), bounds(n..mesh.num_faces()));
+    let overlap = a.0.x < b.1.x && b.0.x < a.1.x && a.0.y < b.1.y && b.0.y < a.1.y;
+    assert!(!overlap);
+}
+
+/// The chart the unwrap cut, as a mesh of its own.
+fn cut_chart(u: &Unwrapped) -> TriMesh {
+    let layer = u.mesh.uvs.as_ref().unwrap();
+    let mut positions = vec![DVec3::ZERO; layer.coords.len()];
+    for (t, uvt) in u.mesh.triangles.iter().zip(&layer.triangles) {
+        for i in 0..3 {
+            positions[uvt[i] as usize] = u.mesh.positions[t[i] as usize];
+        }
+    }
+    TriMesh::new(positions, layer.triangles.clone())
+}
+
+fn conf_mean(chart: &TriMesh, uv: &[DVec2]) -> f64 {
+    let (mut sum, mut area) = (0.0, 0.0);
+    for (f, t) in chart.triangles.iter().enumerate() {
+        let (s1, s2, _) = jacobian(chart.corners(f), t.map(|v| uv[v as usize]));
+        sum += chart.face_area(f) * s1 / s2;
+        area += chart.face_area(f);
+    }
+    sum / area
+}
+
+#[test]
+fn abf_is_as_conformal_as_lscm_on_the_same_cut_and_never_flips() {
+    for file in ["bunny.obj", "bunny10k_textured.obj"] {
+        let u = run(&io::read(&data(file)).unwrap());
+        let chart = cut_chart(&u);
+        let topo = Topology::build(&chart).unwrap();
+        let solution = abf::solve(&chart, &topo, &abf::AbfOptions::default()).unwrap();
+        let abf_uv = layout::from_angles(&chart, &topo, &solution.angles).unwrap();
+        let lscm_uv = layout::from_angles(&chart, &topo, &corner_angles(&chart)).unwrap();
+        assert_eq!(
+            flatten::flipped(&chart, &abf_uv),
+            0,
+            "{file}: ABF++ flipped a triangle"
+        );
+        let (abf, lscm) = (conf_mean(&chart, &abf_uv), conf_mean(&chart, &lscm_uv));
+        println!("{file}: conf_mean ABF++ {abf:.5}, LSCM {lscm:.5}");
+        assert!(abf <= lscm * 1.01, "{file}: ABF++ {abf} vs LSCM {lscm}");
+    }
+}
+
+#[test]
+fn coincident_vertices_and_zero_area_faces_give_finite_uvs_and_no_flips() {
+    let mut mesh = io::read(&data("bunny10k_textured.obj")).unwrap();
+    // Move a vertex onto a neighbour: its two shared faces lose all area.
+    let [a, b, _] = mesh.triangles[100];
+    mesh.positions[a as usize] = mesh.positions[b as usize];
+    let u = run(&mesh);
+    assert_disk_charts(&u, 1);
+}
+
+#[test]
+fn a_cavity_seen_from_inside_unwraps_with_endoscope_cameras() {
+    // A closed tube (capped cylinder), cameras along its axis inside.
+    let mut mesh = holed_slab(0, 3, 2);
+    mesh.positions
+        .iter_mut()
+        .for_each(|p| *p *= DVec3::new(1.0, 1.0, 3.0));
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let centre = (lo + hi) / 2.0;
+    let opts = UnwrapOptions {
+        viewpoints: Viewpoints::Cameras(vec![centre, centre + DVec3::X * 0.5]),
+        ..UnwrapOptions::default()
+    };
+    let u = unwrap(&mesh, &opts, &Silent).unwrap();
+    assert_eq!(u.report.views, 2);
+    assert!(
+        u.visibility.vertex.iter().all(|&v| v > 0.0),
+        "inside walls are all seen"
+    );
+    assert_disk_charts(&u, 1);
+}

@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Compare organtex's unwrap with xatlas and pymeshlab on the same meshes.
+
+Every tool's uv layout is written as OBJ over the original vertices and
+measured by the same code (`organtex uv-metrics`: charts, flips, conf_mean,
+area_log, seam_ratio, seam_vis, all defined in src/unwrap/metrics.rs), and
+timed in-process (organtex's report covers visibility through uv; xatlas's
+time is its parametrize call; pymeshlab's its filter).
+
+Usage: tools/compare_uv.py [MESH ...] [--quick]
+  default meshes: tests/data/bunny.obj, bunny10k_textured.obj, cube.obj and
+  pymeshlab's sample cow, airplane and bone (meshes organtex is not tuned
+  on); --quick: bunny10k_textured.obj only (what CI runs).
+Exits 1 if organtex flips a triangle or gives a piece more than one chart.
+"""
+
+import argparse
+import json
+import multiprocessing
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pyenv  # noqa: E402
+
+ROOT = pyenv.ROOT
+REQUIREMENTS = ["pymeshlab==2025.7.post1", "numpy", "xatlas==0.0.11"]
+
+
+def sample_meshes():
+    import pymeshlab
+
+    folder = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
+    return [folder / n for n in ("cow.obj", "airplane.obj", "bone.ply") if (folder / n).exists()]
+
+
+def load(path):
+    """Vertices and triangles in file order (pymeshlab keeps OBJ/PLY order)."""
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    m = ms.current_mesh()
+    return m.vertex_matrix(), m.face_matrix()
+
+
+def write_obj(path, vertices, faces, uvs, uv_faces):
+    with open(path, "w") as f:
+        for v in vertices:
+            f.write("v {!r} {!r} {!r}\n".format(*map(float, v)))
+        for t in uvs:
+            f.write("vt {!r} {!r}\n".format(*map(float, t)))
+        for tri, uvt in zip(faces, uv_faces):
+            f.write("f " + " ".join(f"{a + 1}/{b + 1}" for a, b in zip(tri, uvt)) + "\n")
+
+
+def metrics(organtex, obj):
+    out = subprocess.run([organtex, "uv-metrics", str(obj)], capture_output=True, text=True)
+    if out.returncode != 0:
+        errors = [l for l in out.stderr.splitlines() if l.startswith("error:")]
+        return {"error": errors[0] if errors else "failed"}
+    return json.loads(out.stdout)
+
+
+def run_organtex(organtex, mesh, tmp):
+    obj, report = tmp / "organtex.obj", tmp / "organtex.json"
+    subprocess.run([organtex, "unwrap", str(mesh), "-o", str(obj), "--report", str(report)], check=True, capture_output=True)
+    r = json.loads(report.read_text())
+    return r["timings"]["total_s"], metrics(organtex, obj)
+
+
+def run_xatlas(organtex, mesh, tmp):
+    import xatlas
+
+    vertices, faces = load(mesh)
+    start = time.perf_counter()
+    vmapping, indices, uvs = xatlas.parametrize(vertices, faces)
+    seconds = time.perf_counter() - start
+    obj = tmp / "xatlas.obj"
+    write_obj(obj, vertices, vmapping[indices], uvs, indices)
+    return seconds, metrics(organtex, obj)
+
+
+def run_pymeshlab_voronoi(organtex, mesh, tmp):
+    """pymeshlab's Voronoi atlas: it remeshes along its chart borders, so it
+    is measured on its own output mesh."""
+    import numpy as np
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(mesh))
+    start = time.perf_counter()
+    ms.generate_voronoi_atlas_parametrization()
+    seconds = time.perf_counter() - start
+    m = ms.mesh(ms.mesh_number() - 1)
+    if not m.has_wedge_tex_coord():
+        return seconds, {"error": "no texture coordinates produced"}
+    faces = m.face_matrix()
+    wedge = m.wedge_tex_coord_matrix().reshape(len(faces), 3, 2)
+    uvs = wedge.reshape(-1, 2)
+    obj = tmp / "voronoi.obj"
+    write_obj(obj, m.vertex_matrix(), faces, uvs, np.arange(len(uvs)).reshape(-1, 3))
+    return seconds, metrics(organtex, obj)
+
+
+def _child(queue, run, args):
+    try:
+        queue.put(run(*args))
+    except Exception as e:  # a peer failing on a mesh is a result too
+        queue.put((float("nan"), {"error": (str(e) or type(e).__name__).splitlines()[0]}))
+
+
+def isolated(run, args, timeout):
+    """Run one tool in a fresh process: pymeshlab keeps state between calls,
+    and a peer that crashes or hangs must not end the comparison."""
+    context = multiprocessing.get_context("spawn")
+    queue = context.Queue()
+    child = context.Process(target=_child, args=(queue, run, args))
+    child.start()
+    try:
+        return queue.get(timeout=timeout)
+    except Exception:
+        return (float("nan"), {"error": f"no result within {timeout} s" if child.is_alive() else "crashed"})
+    finally:
+        child.kill()
+        child.join()
+
+
+TOOLS = [("organtex", run_organtex), ("xatlas", run_xatlas), ("pymeshlab voronoi", run_pymeshlab_voronoi)]
+
+
+def main():
+    pyenv.ensure(REQUIREMENTS, __file__)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("meshes", nargs="*", type=Path)
+    parser.add_argument("--quick", action="store_true", help="bunny10k_textured.obj only")
+    parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
+    parser.add_argument("--timeout", type=float, default=120, help="seconds each tool gets per mesh")
+    args = parser.parse_args()
+    data = ROOT / "tests" / "data"
+    meshes = args.meshes or (
+        [data / "bunny10k_textured.obj"]
+        if args.quick
+        else [data / "bunny.obj", data / "bunny10k_textured.obj", data / "cube.obj", *sample_meshes()]
+    )
+
+    failures = []
+    print(f"{'mesh':<22}{'tool':<19}{'time s':>8}{'charts':>7}{'flips':>6}{'conf':>8}{'area_log':>9}{'seam_r':>8}{'seam_vis':>9}  vs xatlas")
+    for mesh in meshes:
+        results = {}
+        with tempfile.TemporaryDirectory() as tmpdir:
+            for name, run in TOOLS:
+                results[name] = isolated(run, (args.organtex, mesh, Path(tmpdir)), args.timeout)
+        x_time, x = results["xatlas"]
+        for name, (seconds, m) in results.items():
+            if "error" in m:
+                print(f"{mesh.name:<22}{name:<19}{seconds:8.2f}  {m['error']}")
+                continue
+            versus = ""
+            if name == "organtex" and "error" not in x:
+                versus = f"seam_vis x{m['seam_vis'] / x['seam_vis']:.2f}, time x{seconds / x_time:.2f}"
+            print(
+                f"{mesh.name:<22}{name:<19}{seconds:8.2f}{m['charts']:7d}{m['flips']:6d}{m['conf_mean']:8.4f}"
+                f"{m['area_log']:9.3f}{m['seam_ratio']:8.2f}{m['seam_vis']:9.2f}  {versus}"
+            )
+        ours = results["organtex"][1]
+        if "error" in ours:
+            failures.append(f"{mesh.name}: organtex failed: {ours['error']}")
+        elif ours["flips"] > 0:
+            failures.append(f"{mesh.name}: organtex flipped {ours['flips']} triangles")
+    if failures:
+        print("\nFAILED:\n  " + "\n  ".join(failures))
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -11,6 +11,8 @@ pub mod linalg;
 pub mod mesh;
 pub mod progress;
 pub mod raster;
+pub mod rng;
+pub mod synth;
 pub mod unwrap;
 
 pub use error::{Error, Result};

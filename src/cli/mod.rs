@@ -4,6 +4,7 @@ mod bench;
 mod generate;
 mod info;
 mod progress;
+mod synth;
 mod unwrap;
 mod uv_metrics;
 
@@ -31,6 +32,12 @@ enum Command {
     /// Cut a mesh along hidden seams into disk charts and flatten them
     /// (Seamster + ABF++); writes an OBJ with uvs.
     Unwrap(unwrap::Args),
+    /// Synthesise a texture (tileable with --tileable) from a masked
+    /// exemplar photograph, pixel by pixel (FNPTS).
+    Synth(synth::Args),
+    /// Quality figures of a texture against its exemplar: coherence,
+    /// completeness (7x7 patches, RMS) and tiling seam.
+    SynthQuality(synth::QualityArgs),
     /// Distortion figures of a mesh's existing uv layout (charts, flips,
     /// conformality, area distortion, seam length and visibility).
     UvMetrics(uv_metrics::Args),
@@ -45,6 +52,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Generate(args)) => generate::run(args),
         Some(Command::Unwrap(args)) => unwrap::run(args),
         Some(Command::UvMetrics(args)) => uv_metrics::run(args),
+        Some(Command::Synth(args)) => synth::run(args),
+        Some(Command::SynthQuality(args)) => synth::quality(args),
         None => info::run(info::Args::for_file(
             organtex::bench::default_data_dir().join("bunny.obj"),
         )),

@@ -1,0 +1,175 @@
+//! `organtex synth SRC --size WxH -o OUT.png`: FNPTS texture synthesis.
+
+use std::path::{Path, PathBuf};
+
+use organtex::synth::exemplar::{Crop, Exemplar};
+use organtex::synth::fnpts::{SynthOptions, Synthesis, synthesize};
+use organtex::{Error, Result};
+
+use super::progress::Bars;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Exemplar photograph (PNG, JPEG).
+    source: PathBuf,
+    /// Mask of usable exemplar pixels: white usable, black masked out (the
+    /// exemplar's alpha channel is used too, if it has one).
+    #[arg(long, value_name = "IMAGE")]
+    mask: Option<PathBuf>,
+    /// Use only this part of the exemplar: X,Y,WIDTH,HEIGHT in pixels.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
+    crop: Option<Crop>,
+    /// Output size, WIDTHxHEIGHT (or one number for a square).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: (usize, usize),
+    /// Make the output tile: it wraps around seamlessly.
+    #[arg(long)]
+    tileable: bool,
+    /// Seed: the same seed gives the same bytes.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Iterations per pixel and pyramid level (M).
+    #[arg(long, default_value_t = 3)]
+    iterations: usize,
+    /// Pyramid levels (default: as many as keep 32 pixels a side).
+    #[arg(long)]
+    levels: Option<usize>,
+    /// Side of the square neighbourhood compared (odd).
+    #[arg(long, default_value_t = 7)]
+    neighbourhood: usize,
+    /// Output PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the exemplar coordinate of every output pixel, as a 16-bit
+    /// PNG (red = x, green = y).
+    #[arg(long, value_name = "PNG")]
+    coords_out: Option<PathBuf>,
+}
+
+fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
+    let parts: Vec<&str> = s.split(['x', 'X']).collect();
+    let n = |p: &str| {
+        p.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("'{s}' is not WIDTHxHEIGHT"))
+    };
+    match parts.as_slice() {
+        [side] => n(side).map(|v| (v, v)),
+        [w, h] => Ok((n(w)?, n(h)?)),
+        _ => Err(format!("'{s}' is not WIDTHxHEIGHT")),
+    }
+}
+
+fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not X,Y,WIDTH,HEIGHT"))?;
+    match v.as_slice() {
+        [x, y, width, height] => Ok(Crop {
+            x: *x,
+            y: *y,
+            width: *width,
+            height: *height,
+        }),
+        _ => Err(format!("'{s}' is not X,Y,WIDTH,HEIGHT")),
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let exemplar = Exemplar::load(&args.source, args.mask.as_deref(), args.crop)?;
+    let opts = SynthOptions {
+        width: args.size.0,
+        height: args.size.1,
+        tileable: args.tileable,
+        seed: args.seed,
+        iterations: args.iterations,
+        levels: args.levels,
+        neighbourhood: args.neighbourhood,
+    };
+    let bars = Bars::new();
+    let start = std::time::Instant::now();
+    let out = synthesize(&exemplar, &opts, &bars)?;
+    bars.finish();
+    write_png(&args.output, &colour_image(&out))?;
+    if let Some(path) = &args.coords_out {
+        write_png(path, &coords_image(&out))?;
+    }
+    println!(
+        "{}: {}x{} from a {}x{} exemplar in {:.2} s",
+        args.output.display(),
+        out.width,
+        out.height,
+        exemplar.width,
+        exemplar.height,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+pub fn colour_image(s: &Synthesis) -> image::DynamicImage {
+    let raw = s.pixels.iter().flatten().copied().collect();
+    image::DynamicImage::ImageRgb8(
+        image::RgbImage::from_raw(s.width as u32, s.height as u32, raw)
+            .expect("one pixel per entry"),
+    )
+}
+
+fn coords_image(s: &Synthesis) -> image::DynamicImage {
+    let raw = s
+        .coords
+        .iter()
+        .flat_map(|c| [c[0] as u16, c[1] as u16, 0])
+        .collect();
+    image::DynamicImage::ImageRgb16(
+        image::ImageBuffer::from_raw(s.width as u32, s.height as u32, raw)
+            .expect("one pixel per entry"),
+    )
+}
+
+/// Encode then write atomically: a failed run leaves no partial PNG.
+pub fn write_png(path: &Path, img: &image::DynamicImage) -> Result<()> {
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::format(path, format!("cannot encode PNG: {e}")))?;
+    organtex::atomic::write_file(path, |w| w.write_all(&bytes))
+}
+
+/// `organtex synth-quality`: coherence, completeness and seam of any
+/// texture against its exemplar.
+#[derive(clap::Args)]
+pub struct QualityArgs {
+    /// The exemplar the texture was made from.
+    exemplar: PathBuf,
+    /// The synthesised texture.
+    texture: PathBuf,
+    /// Mask of usable exemplar pixels (white usable).
+    #[arg(long, value_name = "IMAGE")]
+    mask: Option<PathBuf>,
+    /// The part of the exemplar used: X,Y,WIDTH,HEIGHT.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
+    crop: Option<Crop>,
+}
+
+pub fn quality(args: QualityArgs) -> Result<()> {
+    let exemplar = Exemplar::load(&args.exemplar, args.mask.as_deref(), args.crop)?;
+    let texture = organtex::synth::exemplar::read_image(&args.texture)?.to_rgb8();
+    let pixels: Vec<[u8; 3]> = texture.pixels().map(|p| p.0).collect();
+    let q = organtex::synth::quality::measure(
+        &exemplar,
+        &organtex::synth::quality::Rgb {
+            width: texture.width() as usize,
+            height: texture.height() as usize,
+            pixels: &pixels,
+        },
+    );
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&q).expect("figures serialise")
+    );
+    Ok(())
+}

@@ -1,0 +1,474 @@
+//! FNPTS, fast non-parametric pixelwise texture synthesis (seed 004, section
+//! 3.2; DESIGN.md "FNPTS").
+//!
+//! Multiscale, coarse to fine over Gaussian pyramids of exemplar and output.
+//! Every output pixel holds the source coordinate its colour was copied from
+//! and n, how often it has been iterated at this level (out of M). Visiting a
+//! pixel picks, among candidate source pixels, the one whose K x K
+//! neighbourhood best matches the output's, by the paper's cost
+//!
+//!   sum over neighbours i of |s_i - r_i| * n_i / M   where s_i is defined,
+//!   the largest possible pixel difference              where it is not
+//!
+//! (undefined: outside the exemplar or masked; Manhattan distance over RGB).
+//! Candidates: each neighbour's source coordinate shifted back by its offset
+//! (coherence, Ashikhmin 2001), source pixels whose colour matches a
+//! neighbour's (the paper's "neighbour of the same colour", colours bucketed
+//! to 4 bits per channel), and a few random ones. Masked pixels are never
+//! candidates, so never copied. A tileable output wraps around.
+//!
+//! Visiting order and parallelism (beyond the paper): pixels fall into
+//! (r+1) x (r+1) interleaved classes, r the neighbourhood radius, so no two
+//! pixels of a class see each other; a pass visits the classes in a seeded
+//! random order, each class all at once in parallel. The output is the same
+//! bytes for any number of threads. A pixel taken over from the coarser
+//! level counts as iterated once. A tileable result is finally rolled so
+//! the tile edges fall where the texture is most continuous.
+
+use rayon::prelude::*;
+
+use super::exemplar::Exemplar;
+use crate::error::{Error, Result};
+use crate::progress::{Progress, check};
+use crate::rng;
+
+#[derive(Clone, Debug)]
+pub struct SynthOptions {
+    pub width: usize,
+    pub height: usize,
+    /// Wrap the output around so it tiles.
+    pub tileable: bool,
+    pub seed: u64,
+    /// M: iterations per pixel and level.
+    pub iterations: usize,
+    /// Pyramid levels; `None` picks as many as keep the coarsest exemplar and
+    /// output at least 32 pixels wide.
+    pub levels: Option<usize>,
+    /// K: side of the square neighbourhood (odd).
+    pub neighbourhood: usize,
+}
+
+impl Default for SynthOptions {
+    fn default() -> Self {
+        SynthOptions {
+            width: 256,
+            height: 256,
+            tileable: true,
+            seed: 0,
+            iterations: 3,
+            levels: None,
+            neighbourhood: 7,
+        }
+    }
+}
+
+/// A synthesised texture and, for every pixel, the exemplar pixel it copies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Synthesis {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[u8; 3]>,
+    pub coords: Vec<[u32; 2]>,
+}
+
+/// Largest per-pixel cost: every channel off by 255.
+const MAX_PIXEL_COST: i64 = 3 * 255;
+/// Random candidates per visit.
+const RANDOM_CANDIDATES: usize = 2;
+
+pub fn synthesize(
+    ex: &Exemplar,
+    opts: &SynthOptions,
+    progress: &dyn Progress,
+) -> Result<Synthesis> {
+    check_options(opts)?;
+    let pyramid = pyramid(ex, opts)?;
+    let levels = pyramid.len();
+    progress.stage("synthesis", (levels * opts.iterations) as u64);
+
+    let mut state: Option<Level> = None;
+    for l in (0..levels).rev() {
+        check(progress)?;
+        let src = &pyramid[l];
+        let (w, h) = (opts.width.div_ceil(1 << l), opts.height.div_ceil(1 << l));
+        let mut level = match state.take() {
+            None => Level::random(src, w, h, opts.seed),
+            Some(coarse) => coarse.refine(src, w, h),
+        };
+        let buckets = ColourBuckets::new(src);
+        for pass in 0..opts.iterations {
+            check(progress)?;
+            level.pass(&buckets, opts, l as u64, pass as u64);
+            progress.advance(1);
+        }
+        state = Some(level);
+    }
+    let level = state.expect("at least one level");
+    let out = Synthesis {
+        width: level.w,
+        height: level.h,
+        pixels: level.colour,
+        coords: level
+            .coord
+            .iter()
+            .map(|&c| [c % ex.width as u32, c / ex.width as u32])
+            .collect(),
+    };
+    Ok(if opts.tileable {
+        out.rolled_to_smoothest_wrap()
+    } else {
+        out
+    })
+}
+
+impl Synthesis {
+    /// A toroidal texture is as seamless inside whatever pixel it starts
+    /// at, but where it starts is where copies of it meet when tiled: roll
+    /// it so the tile edges fall on the column and the row across which
+    /// the colours jump least.
+    pub fn rolled_to_smoothest_wrap(self) -> Synthesis {
+        let (w, h) = (self.width, self.height);
+        let jump = |a: usize, b: usize| -> u32 {
+            let (p, q) = (self.pixels[a], self.pixels[b]);
+            (0..3)
+                .map(|c| (p[c] as i32 - q[c] as i32).unsigned_abs())
+                .sum()
+        };
+        // Cost of a vertical cut left of column x, and a horizontal one above row y.
+        let column = |x: usize| {
+            (0..h)
+                .map(|y| jump(y * w + (x + w - 1) % w, y * w + x))
+                .sum::<u32>()
+        };
+        let row = |y: usize| {
+            (0..w)
+                .map(|x| jump(((y + h - 1) % h) * w + x, y * w + x))
+                .sum::<u32>()
+        };
+        let ox = (0..w).min_by_key(|&x| (column(x), x)).unwrap_or(0);
+        let oy = (0..h).min_by_key(|&y| (row(y), y)).unwrap_or(0);
+        let roll = |i: usize| ((i / w + oy) % h) * w + (i % w + ox) % w;
+        Synthesis {
+            width: w,
+            height: h,
+            pixels: (0..w * h).map(|i| self.pixels[roll(i)]).collect(),
+            coords: (0..w * h).map(|i| self.coords[roll(i)]).collect(),
+        }
+    }
+}
+
+/// Exemplar pyramid, finest first: as many levels as asked, or (by
+/// default) while the next exemplar and output would keep 32 pixels a side.
+fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
+    let mut pyramid = vec![ex.clone()];
+    match opts.levels {
+        Some(levels) => {
+            while pyramid.len() < levels {
+                let coarser = pyramid
+                    .last()
+                    .and_then(|e| e.downsample(opts.neighbourhood))
+                    .ok_or_else(|| {
+                        Error::invalid(format!(
+                            "{levels} pyramid levels need an exemplar of at least {} pixels a side, with usable pixels at every level",
+                            opts.neighbourhood << (levels - 1)
+                        ))
+                    })?;
+                pyramid.push(coarser);
+            }
+        }
+        None => {
+            while opts.width.min(opts.height) >> pyramid.len() >= 32 {
+                match pyramid.last().and_then(|e| e.downsample(32)) {
+                    Some(coarser) => pyramid.push(coarser),
+                    None => break,
+                }
+            }
+        }
+    }
+    Ok(pyramid)
+}
+
+fn check_options(opts: &SynthOptions) -> Result<()> {
+    if !(1..=16384).contains(&opts.width) || !(1..=16384).contains(&opts.height) {
+        return Err(Error::invalid(format!(
+            "the output size {}x{} is outside 1..16384 pixels a side",
+            opts.width, opts.height
+        )));
+    }
+    if opts.neighbourhood.is_multiple_of(2) || !(3..=15).contains(&opts.neighbourhood) {
+        return Err(Error::invalid(format!(
+            "the neighbourhood must be odd, from 3 to 15, not {}",
+            opts.neighbourhood
+        )));
+    }
+    if !(1..=16).contains(&opts.iterations) {
+        return Err(Error::invalid(format!(
+            "iterations must be from 1 to 16, not {}",
+            opts.iterations
+        )));
+    }
+    if opts.levels == Some(0) {
+        return Err(Error::invalid("levels must be at least 1"));
+    }
+    Ok(())
+}
+
+/// Usable exemplar pixels grouped by colour at 4 bits per channel.
+struct ColourBuckets {
+    start: Vec<u32>,
+    items: Vec<u32>,
+    /// Every usable pixel, for random candidates.
+    usable: Vec<u32>,
+}
+
+#[inline]
+fn bucket(c: [u8; 3]) -> usize {
+    ((c[0] as usize >> 4) << 8) | ((c[1] as usize >> 4) << 4) | (c[2] as usize >> 4)
+}
+
+impl ColourBuckets {
+    fn new(src: &Exemplar) -> Self {
+        let usable: Vec<u32> = (0..src.pixels.len() as u32)
+            .filter(|&i| src.valid[i as usize])
+            .collect();
+        let mut count = vec![0u32; 4097];
+        for &i in &usable {
+            count[bucket(src.pixels[i as usize]) + 1] += 1;
+        }
+        for b in 0..4096 {
+            count[b + 1] += count[b];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![0; usable.len()];
+        for &i in &usable {
+            let b = bucket(src.pixels[i as usize]);
+            items[fill[b] as usize] = i;
+            fill[b] += 1;
+        }
+        ColourBuckets {
+            start: count,
+            items,
+            usable,
+        }
+    }
+
+    fn of(&self, c: [u8; 3]) -> &[u32] {
+        let b = bucket(c);
+        &self.items[self.start[b] as usize..self.start[b + 1] as usize]
+    }
+}
+
+/// The output at one pyramid level.
+struct Level<'a> {
+    src: &'a Exemplar,
+    w: usize,
+    h: usize,
+    /// Source pixel index of every output pixel.
+    coord: Vec<u32>,
+    /// Times each pixel was iterated at this level.
+    iters: Vec<u8>,
+    /// Colour of every output pixel (the source's at `coord`).
+    colour: Vec<[u8; 3]>,
+}
+
+impl<'a> Level<'a> {
+    /// Coarsest level: every pixel a random usable source pixel, not yet
+    /// iterated.
+    fn random(src: &'a Exemplar, w: usize, h: usize, seed: u64) -> Self {
+        let usable: Vec<u32> = (0..src.pixels.len() as u32)
+            .filter(|&i| src.valid[i as usize])
+            .collect();
+        let coord: Vec<u32> = (0..w * h)
+            .map(|p| usable[rng::below(seed, &[u64::MAX, p as u64], usable.len())])
+            .collect();
+        Self::with_coords(src, w, h, coord, 0)
+    }
+
+    fn with_coords(src: &'a Exemplar, w: usize, h: usize, coord: Vec<u32>, iterated: u8) -> Self {
+        let colour = coord.iter().map(|&c| src.pixels[c as usize]).collect();
+        Level {
+            src,
+            w,
+            h,
+            coord,
+            iters: vec![iterated; w * h],
+            colour,
+        }
+    }
+
+    /// The next finer level: each pixel's coordinate doubled plus its own
+    /// offset within its parent (usable, as coarse usable pixels only come
+    /// from fully usable 2 x 2 blocks).
+    fn refine(self, src: &'a Exemplar, w: usize, h: usize) -> Self {
+        let coarse_w = self.src.width as u32;
+        let coord = (0..w * h)
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                let parent = self.coord[(y / 2).min(self.h - 1) * self.w + (x / 2).min(self.w - 1)];
+                let (px, py) = (parent % coarse_w, parent / coarse_w);
+                let sx = (2 * px as usize + x % 2).min(src.width - 1);
+                let sy = (2 * py as usize + y % 2).min(src.height - 1);
+                let i = src.index(sx, sy);
+                if src.valid[i] {
+                    i as u32
+                } else {
+                    src.index(2 * px as usize, 2 * py as usize) as u32
+                }
+            })
+            .collect();
+        Self::with_coords(src, w, h, coord, 1)
+    }
+
+    /// Output pixel at (x + dx, y + dy): wrapped when tileable, else `None`
+    /// outside.
+    #[inline]
+    fn at(&self, x: usize, y: usize, dx: i32, dy: i32, tileable: bool) -> Option<usize> {
+        let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+        if tileable {
+            let nx = nx.rem_euclid(self.w as i32) as usize;
+            let ny = ny.rem_euclid(self.h as i32) as usize;
+            Some(ny * self.w + nx)
+        } else if nx >= 0 && ny >= 0 && (nx as usize) < self.w && (ny as usize) < self.h {
+            Some(ny as usize * self.w + nx as usize)
+        } else {
+            None
+        }
+    }
+
+    /// One pass: every pixel visited once, classes in a seeded random order.
+    fn pass(&mut self, buckets: &ColourBuckets, opts: &SynthOptions, level: u64, pass: u64) {
+        let r = (opts.neighbourhood / 2) as i32;
+        let k = (r + 1) as usize;
+        let window = window(r);
+        let order = rng::permutation(opts.seed, &[level, pass], k * k);
+        for class in order {
+            let (cx, cy, w) = (class % k, class / k, self.w);
+            let pixels: Vec<usize> = (cy..self.h)
+                .step_by(k)
+                .flat_map(|y| (cx..w).step_by(k).map(move |x| y * w + x))
+                .collect();
+            let this = &*self;
+            let chosen: Vec<u32> = pixels
+                .par_iter()
+                .map(|&p| this.best_source(p, buckets, opts, &window, [level, pass]))
+                .collect();
+            for (&p, &c) in pixels.iter().zip(&chosen) {
+                self.coord[p] = c;
+                self.colour[p] = self.src.pixels[c as usize];
+                self.iters[p] = self.iters[p].saturating_add(1).min(opts.iterations as u8);
+            }
+        }
+    }
+
+    /// The candidate source pixel whose neighbourhood costs least for
+    /// output pixel `p`.
+    fn best_source(
+        &self,
+        p: usize,
+        buckets: &ColourBuckets,
+        opts: &SynthOptions,
+        window: &[(i32, i32)],
+        key: [u64; 2],
+    ) -> u32 {
+        let (x, y) = (p % self.w, p / self.w);
+        let sw = self.src.width as i32;
+        let sh = self.src.height as i32;
+        let mut candidates: Vec<u32> = Vec::with_capacity(16);
+        let mut offer = |sx: i32, sy: i32| {
+            if sx >= 0 && sy >= 0 && sx < sw && sy < sh {
+                let i = (sy * sw + sx) as u32;
+                if self.src.valid[i as usize] && !candidates.contains(&i) {
+                    candidates.push(i);
+                }
+            }
+        };
+        if self.iters[p] > 0 {
+            let c = self.coord[p] as i32;
+            offer(c % sw, c / sw);
+        }
+        for &(dx, dy) in &RING {
+            let Some(q) = self.at(x, y, dx, dy, opts.tileable) else {
+                continue;
+            };
+            if self.iters[q] == 0 {
+                continue;
+            }
+            let c = self.coord[q] as i32;
+            // Coherence: the source pixel that neighbour's source sits next to.
+            offer(c % sw - dx, c / sw - dy);
+            // Same colour: a source pixel whose neighbour at this offset has
+            // that neighbour's colour.
+            if dx == 0 || dy == 0 {
+                let same = buckets.of(self.colour[q]);
+                if !same.is_empty() {
+                    let s = same[rng::below(
+                        opts.seed,
+                        &[key[0], key[1], p as u64, (dx + 2 * dy + 8) as u64],
+                        same.len(),
+                    )] as i32;
+                    offer(s % sw - dx, s / sw - dy);
+                }
+            }
+        }
+        for k in 0..RANDOM_CANDIDATES {
+            let s = buckets.usable[rng::below(
+                opts.seed,
+                &[key[0], key[1], p as u64, 100 + k as u64],
+                buckets.usable.len(),
+            )] as i32;
+            offer(s % sw, s / sw);
+        }
+
+        let m = opts.iterations as i64;
+        let mut best = (i64::MAX, candidates[0]);
+        for &c in &candidates {
+            let (cx, cy) = ((c as i32) % sw, (c as i32) / sw);
+            let mut cost = 0i64;
+            for &(dx, dy) in window {
+                let Some(q) = self.at(x, y, dx, dy, opts.tileable) else {
+                    continue;
+                };
+                let (sx, sy) = (cx + dx, cy + dy);
+                let s = (sy * sw + sx) as usize;
+                if sx < 0 || sy < 0 || sx >= sw || sy >= sh || !self.src.valid[s] {
+                    cost += MAX_PIXEL_COST * m;
+                } else if self.iters[q] > 0 {
+                    let (a, b) = (self.src.pixels[s], self.colour[q]);
+                    let d = (a[0] as i64 - b[0] as i64).abs()
+                        + (a[1] as i64 - b[1] as i64).abs()
+                        + (a[2] as i64 - b[2] as i64).abs();
+                    cost += d * self.iters[q] as i64;
+                }
+                if cost >= best.0 {
+                    break;
+                }
+            }
+            if cost < best.0 {
+                best = (cost, c);
+            }
+        }
+        best.1
+    }
+}
+
+/// The 8 neighbours of a pixel.
+const RING: [(i32, i32); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
+/// The (2r+1)^2 offsets of the neighbourhood, nearest first, so the cost
+/// check can stop early on the pixels that matter most.
+fn window(r: i32) -> Vec<(i32, i32)> {
+    let mut w: Vec<(i32, i32)> = (-r..=r)
+        .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
+        .collect();
+    w.sort_by_key(|&(dx, dy)| (dx * dx + dy * dy, dy, dx));
+    w
+}

@@ -39,3 +39,14 @@ pub fn write_file(
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
+
+/// Encode `img` as PNG and write it atomically.
+pub fn write_png(path: &Path, img: &image::DynamicImage) -> Result<()> {
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::format(path, format!("cannot encode PNG: {e}")))?;
+    write_file(path, |w| w.write_all(&bytes))
+}

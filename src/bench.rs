@@ -13,6 +13,8 @@ use crate::error::Result;
 use crate::mesh::curvature::Curvature;
 use crate::mesh::{Components, Topology, io};
 use crate::progress::Silent;
+use crate::synth::exemplar::{Crop, Exemplar};
+use crate::synth::fnpts::{SynthOptions, synthesize};
 use crate::unwrap::{UnwrapOptions, unwrap};
 
 /// The timed step of a workload.
@@ -22,8 +24,8 @@ pub struct Workload {
     pub name: &'static str,
     /// What the step does, for the table's reader.
     pub what: &'static str,
-    /// Load the inputs from the data folder (untimed) and return the step
-    /// to time.
+    /// Load the inputs from the project folder (untimed) and return the
+    /// step to time.
     pub prepare: fn(&Path) -> Result<Step>,
 }
 
@@ -37,11 +39,14 @@ pub struct Timing {
     pub max_s: f64,
 }
 
-/// Where the bundled test data lives in a source checkout.
-pub fn default_data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests")
-        .join("data")
+/// The source checkout, whose tests/data and database/sources hold the
+/// workloads' inputs.
+pub fn default_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn bunny(root: &Path) -> PathBuf {
+    root.join("tests").join("data").join("bunny.obj")
 }
 
 /// Every standard workload.
@@ -50,16 +55,16 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "load bunny",
             what: "read bunny.obj (56k faces)",
-            prepare: |data| {
-                let path = data.join("bunny.obj");
+            prepare: |root| {
+                let path = bunny(root);
                 Ok(Box::new(move || io::read(&path).map(drop)))
             },
         },
         Workload {
             name: "topology bunny",
             what: "half-edges, boundary loops, components, genus",
-            prepare: |data| {
-                let mesh = io::read(&data.join("bunny.obj"))?;
+            prepare: |root| {
+                let mesh = io::read(&bunny(root))?;
                 Ok(Box::new(move || {
                     let topo = Topology::build(&mesh)?;
                     Components::find(&topo).topology(&topo);
@@ -70,8 +75,8 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "curvature bunny",
             what: "angle defect, mixed area, mean curvature, dihedral angles",
-            prepare: |data| {
-                let mesh = io::read(&data.join("bunny.obj"))?;
+            prepare: |root| {
+                let mesh = io::read(&bunny(root))?;
                 let topo = Topology::build(&mesh)?;
                 Ok(Box::new(move || {
                     Curvature::compute(&mesh, &topo);
@@ -82,8 +87,8 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "load+topology+curvature bunny",
             what: "the three above end to end (target < 0.3 s)",
-            prepare: |data| {
-                let path = data.join("bunny.obj");
+            prepare: |root| {
+                let path = bunny(root);
                 Ok(Box::new(move || {
                     let mesh = io::read(&path)?;
                     let topo = Topology::build(&mesh)?;
@@ -96,20 +101,52 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "unwrap bunny",
             what: "visibility, seams, ABF++ and layout, one chart (target: 1/4 of xatlas)",
-            prepare: |data| {
-                let mesh = io::read(&data.join("bunny.obj"))?;
+            prepare: |root| {
+                let mesh = io::read(&bunny(root))?;
                 Ok(Box::new(move || {
                     unwrap(&mesh, &UnwrapOptions::default(), &Silent).map(drop)
                 }))
             },
         },
+        Workload {
+            name: "synth 128->256",
+            what: "FNPTS, tileable, from a 128x128 gravel crop (target: half Embark's time)",
+            prepare: |root| synth_step(root, 128, 256),
+        },
+        Workload {
+            name: "synth 256->512",
+            what: "FNPTS, tileable, from a 256x256 gravel crop (target: half Embark's time)",
+            prepare: |root| synth_step(root, 256, 512),
+        },
     ]
 }
 
-/// Time `workload`'s step `runs` times (at least once) on the inputs in
-/// `data`.
-pub fn time(workload: &Workload, data: &Path, runs: usize) -> Result<Timing> {
-    let mut step = (workload.prepare)(data)?;
+/// Synthesise `output` pixels square from the top left `input` square of
+/// the database's gravel photograph.
+fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
+    let gravel = root.join("database").join("sources").join("gravel.png");
+    let crop = Crop {
+        x: 0,
+        y: 0,
+        width: input,
+        height: input,
+    };
+    let exemplar = Exemplar::load(&gravel, None, Some(crop))?;
+    let opts = SynthOptions {
+        width: output,
+        height: output,
+        tileable: true,
+        ..SynthOptions::default()
+    };
+    Ok(Box::new(move || {
+        synthesize(&exemplar, &opts, &Silent).map(drop)
+    }))
+}
+
+/// Time `workload`'s step `runs` times (at least once) on the inputs under
+/// `root`.
+pub fn time(workload: &Workload, root: &Path, runs: usize) -> Result<Timing> {
+    let mut step = (workload.prepare)(root)?;
     let mut secs = Vec::with_capacity(runs.max(1));
     for _ in 0..runs.max(1) {
         let start = Instant::now();

@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod bench;
+pub mod db;
 pub mod error;
 pub mod linalg;
 pub mod mesh;

@@ -358,3 +358,120 @@ fn unwrap_gives_the_same_bytes_on_one_or_two_threads() {
         "same uvs whatever the thread count"
     );
 }
+
+#[test]
+fn synthesis_refuses_bad_input_clearly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let g = gravel.to_str().unwrap();
+    let out = d("out.png");
+    let o = out.to_str().unwrap();
+
+    std::fs::write(d("junk.png"), b"this is not an image").unwrap();
+    // A PNG header claiming a 0 x 0 image.
+    let mut empty = vec![
+        0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13, b'I', b'H', b'D', b'R',
+    ];
+    empty.extend([0, 0, 0, 0, 0, 0, 0, 0, 8, 2, 0, 0, 0, 0, 0, 0, 0]);
+    std::fs::write(d("empty.png"), &empty).unwrap();
+    image::GrayImage::new(10, 10)
+        .save(d("small_mask.png"))
+        .unwrap();
+    image::GrayImage::new(512, 512)
+        .save(d("black_mask.png"))
+        .unwrap();
+
+    let path = |n: &str| d(n).to_str().unwrap().to_string();
+    let cases: Vec<(&str, PathBuf, &str, Vec<String>)> = vec![
+        (
+            "missing image",
+            d("nowhere.png"),
+            "No such file",
+            vec!["synth".into(), path("nowhere.png")],
+        ),
+        (
+            "unreadable image",
+            d("junk.png"),
+            "cannot read the image",
+            vec!["synth".into(), path("junk.png")],
+        ),
+        (
+            "zero-size image",
+            d("empty.png"),
+            "cannot read the image",
+            vec!["synth".into(), path("empty.png")],
+        ),
+        (
+            "mask of another size",
+            d("small_mask.png"),
+            "the mask is 10x10 but the image",
+            vec![
+                "synth".into(),
+                g.into(),
+                "--mask".into(),
+                path("small_mask.png"),
+            ],
+        ),
+        (
+            "mask hiding everything",
+            d("black_mask.png"),
+            "the mask hides every pixel",
+            vec![
+                "synth".into(),
+                g.into(),
+                "--mask".into(),
+                path("black_mask.png"),
+            ],
+        ),
+        (
+            "crop outside the image",
+            gravel.clone(),
+            "the crop 100x100 at (450, 0) lies outside the 512x512 image",
+            vec![
+                "synth".into(),
+                g.into(),
+                "--crop".into(),
+                "450,0,100,100".into(),
+            ],
+        ),
+    ];
+    for (name, file, expect, mut args) in cases {
+        args.extend(["--size".into(), "64".into(), "-o".into(), o.into()]);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        check_refused(name, &file, expect, &args);
+    }
+    for size in ["0", "20000x64"] {
+        let (ok, _, stderr) = organtex(&["synth", g, "--size", size, "-o", o]);
+        assert!(
+            !ok && stderr.contains("outside 1..16384 pixels a side"),
+            "{size}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"));
+    }
+    assert!(!out.exists(), "no partial output");
+}
+
+#[test]
+fn database_errors_name_the_key_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let index = dir.path().join("index.toml");
+    let db = dir.path().to_str().unwrap();
+    std::fs::write(&index, "[[tissue]]\nid = \"a\"\nname = \"A\"\nkind = \"x\"\nsource = \"a.png\"\noutputs = [\"colour\"]\ncolour = \"red\"\n").unwrap();
+    check_refused(
+        "unknown key",
+        &index,
+        "line 7: unknown field `colour`",
+        &["db", "--database", db, "list"],
+    );
+    std::fs::write(&index, "[[tissue]]\nid = \"a\"\nname = \"A\"\nkind = \"x\"\nsource = \"missing.png\"\noutputs = [\"height\"]\n").unwrap();
+    check_refused(
+        "missing source",
+        &index,
+        "tissue 'a': missing.png does not exist",
+        &["db", "--database", db, "list"],
+    );
+    std::fs::write(&index, "").unwrap();
+    let (ok, _, stderr) = organtex(&["db", "--database", db, "build", "nosuch"]);
+    assert!(!ok && stderr.contains("no tissue 'nosuch'"), "{stderr}");
+}

@@ -8,6 +8,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV = ROOT / "target" / "pyenv"
+# Packages whose import name differs from their name on PyPI.
+IMPORT_NAMES = {"pillow": "PIL"}
 
 
 def ensure(requirements, script):
@@ -20,7 +22,7 @@ def ensure(requirements, script):
         subprocess.run([str(python), "-m", "pip", "install", "-q", "--upgrade", "pip"], check=True)
     missing = subprocess.run(
         [str(python), "-c", "import importlib.util, sys; sys.exit(any(importlib.util.find_spec(m) is None for m in sys.argv[1:]))",
-         *[r.split("=")[0].split("[")[0] for r in requirements]],
+         *[IMPORT_NAMES.get(name, name) for name in (r.split("=")[0].split("[")[0] for r in requirements)]],
     ).returncode != 0
     if missing:
         print(f"{Path(script).name}: installing {' '.join(requirements)}", flush=True)

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use organtex::Result;
-use organtex::bench::{default_data_dir, time, workloads};
+use organtex::bench::{default_root, time, workloads};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -16,9 +16,10 @@ pub struct Args {
     /// Only run workloads whose name contains this text (repeatable).
     #[arg(long, value_name = "TEXT")]
     only: Vec<String>,
-    /// Folder holding the workloads' inputs (bunny.obj, ...).
-    #[arg(long, value_name = "DIR", default_value_os_t = default_data_dir())]
-    data: PathBuf,
+    /// The organtex source folder, whose tests/data and database/sources
+    /// hold the workloads' inputs.
+    #[arg(long, value_name = "DIR", default_value_os_t = default_root())]
+    root: PathBuf,
     /// List the workloads and exit.
     #[arg(long)]
     list: bool,
@@ -53,7 +54,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     for w in &chosen {
-        let t = time(w, &args.data, args.runs)?;
+        let t = time(w, &args.root, args.runs)?;
         if !args.json {
             println!(
                 "{:<32}{:>12}{:>12}{:>12}  {:>4}  {}",

@@ -1,6 +1,7 @@
 //! Argument definitions and dispatch.
 
 mod bench;
+mod db;
 mod generate;
 mod info;
 mod progress;
@@ -41,6 +42,8 @@ enum Command {
     /// Distortion figures of a mesh's existing uv layout (charts, flips,
     /// conformality, area distortion, seam length and visibility).
     UvMetrics(uv_metrics::Args),
+    /// The tissue texture database: list entries, build their textures.
+    Db(db::Args),
     /// Write a generated test shape (torus, double torus, cylinder, sphere).
     Generate(generate::Args),
 }
@@ -53,9 +56,13 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Unwrap(args)) => unwrap::run(args),
         Some(Command::UvMetrics(args)) => uv_metrics::run(args),
         Some(Command::Synth(args)) => synth::run(args),
+        Some(Command::Db(args)) => db::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => info::run(info::Args::for_file(
-            organtex::bench::default_data_dir().join("bunny.obj"),
+            organtex::bench::default_root()
+                .join("tests")
+                .join("data")
+                .join("bunny.obj"),
         )),
     }
 }

@@ -1,10 +1,10 @@
 //! `organtex synth SRC --size WxH -o OUT.png`: FNPTS texture synthesis.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+use organtex::Result;
 use organtex::synth::exemplar::{Crop, Exemplar};
 use organtex::synth::fnpts::{SynthOptions, Synthesis, synthesize};
-use organtex::{Error, Result};
 
 use super::progress::Bars;
 
@@ -37,6 +37,10 @@ pub struct Args {
     /// Side of the square neighbourhood compared (odd).
     #[arg(long, default_value_t = 7)]
     neighbourhood: usize,
+    /// Weight of the occurrence cost, which spreads copies over the whole
+    /// exemplar (0: the paper's cost alone).
+    #[arg(long, default_value_t = 0.1)]
+    occurrence: f64,
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
@@ -87,14 +91,15 @@ pub fn run(args: Args) -> Result<()> {
         iterations: args.iterations,
         levels: args.levels,
         neighbourhood: args.neighbourhood,
+        occurrence: args.occurrence,
     };
     let bars = Bars::new();
     let start = std::time::Instant::now();
     let out = synthesize(&exemplar, &opts, &bars)?;
     bars.finish();
-    write_png(&args.output, &colour_image(&out))?;
+    organtex::atomic::write_png(&args.output, &colour_image(&out))?;
     if let Some(path) = &args.coords_out {
-        write_png(path, &coords_image(&out))?;
+        organtex::atomic::write_png(path, &coords_image(&out))?;
     }
     println!(
         "{}: {}x{} from a {}x{} exemplar in {:.2} s",
@@ -126,17 +131,6 @@ fn coords_image(s: &Synthesis) -> image::DynamicImage {
         image::ImageBuffer::from_raw(s.width as u32, s.height as u32, raw)
             .expect("one pixel per entry"),
     )
-}
-
-/// Encode then write atomically: a failed run leaves no partial PNG.
-pub fn write_png(path: &Path, img: &image::DynamicImage) -> Result<()> {
-    let mut bytes = Vec::new();
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| Error::format(path, format!("cannot encode PNG: {e}")))?;
-    organtex::atomic::write_file(path, |w| w.write_all(&bytes))
 }
 
 /// `organtex synth-quality`: coherence, completeness and seam of any

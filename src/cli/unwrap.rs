@@ -143,11 +143,5 @@ fn read_cameras(path: &Path) -> Result<Vec<DVec3>> {
 }
 
 fn save(path: &Path, img: &image::RgbImage) -> Result<()> {
-    let mut bytes = Vec::new();
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| Error::invalid(format!("{}: cannot encode PNG: {e}", path.display())))?;
-    organtex::atomic::write_file(path, |w| w.write_all(&bytes))
+    organtex::atomic::write_png(path, &image::DynamicImage::ImageRgb8(img.clone()))
 }

@@ -116,9 +116,11 @@ impl Exemplar {
         y * self.width + x
     }
 
-    /// Half the size: each pixel the mean of its 2 x 2 children, usable only
-    /// if all four are, so a usable coarse pixel always refines into usable
-    /// fine ones. `None` once a side would drop below `min_side`.
+    /// Half the size: each pixel the mean of its usable 2 x 2 children,
+    /// usable when most of them (at least 3) are. Asking all four would let
+    /// a vessel mask eat the coarse levels until only vessel-free regions
+    /// remain, and the synthesis would copy from those alone. `None` once a
+    /// side would drop below `min_side` or nothing is usable.
     pub fn downsample(&self, min_side: usize) -> Option<Exemplar> {
         let (w, h) = (self.width / 2, self.height / 2);
         if w < min_side || h < min_side {
@@ -128,20 +130,26 @@ impl Exemplar {
         let mut valid = Vec::with_capacity(w * h);
         for y in 0..h {
             for x in 0..w {
-                let children = [
-                    self.index(2 * x, 2 * y),
-                    self.index(2 * x + 1, 2 * y),
-                    self.index(2 * x, 2 * y + 1),
-                    self.index(2 * x + 1, 2 * y + 1),
-                ];
+                let children = self.children(x, y);
+                let usable: Vec<usize> = children
+                    .iter()
+                    .copied()
+                    .filter(|&i| self.valid[i])
+                    .collect();
+                let from: &[usize] = if usable.is_empty() {
+                    &children
+                } else {
+                    &usable
+                };
                 let mut sum = [0u32; 3];
-                for &i in &children {
+                for &i in from {
                     for (s, &c) in sum.iter_mut().zip(&self.pixels[i]) {
                         *s += c as u32;
                     }
                 }
-                pixels.push(sum.map(|s| ((s + 2) / 4) as u8));
-                valid.push(children.iter().all(|&i| self.valid[i]));
+                let n = from.len() as u32;
+                pixels.push(sum.map(|s| ((s + n / 2) / n) as u8));
+                valid.push(usable.len() >= 3);
             }
         }
         valid.iter().any(|&v| v).then_some(Exemplar {
@@ -150,6 +158,17 @@ impl Exemplar {
             pixels,
             valid,
         })
+    }
+
+    /// The 2 x 2 pixels under coarse pixel (x, y): top left, top right,
+    /// bottom left, bottom right.
+    pub fn children(&self, x: usize, y: usize) -> [usize; 4] {
+        [
+            self.index(2 * x, 2 * y),
+            self.index(2 * x + 1, 2 * y),
+            self.index(2 * x, 2 * y + 1),
+            self.index(2 * x + 1, 2 * y + 1),
+        ]
     }
 }
 

@@ -1,6 +1,11 @@
 //! Texture synthesis: tileable 2D textures from masked tissue photographs
-//! (FNPTS), their quality figures, height maps and vessel overlays.
+//! (FNPTS), their quality figures, height maps, vessel overlays, and masks
+//! computed from the photographs.
 
 pub mod exemplar;
+pub mod filter;
 pub mod fnpts;
+pub mod height;
+pub mod mask;
 pub mod quality;
+pub mod vessels;

@@ -46,13 +46,16 @@ pub struct Rgb<'a> {
 pub fn measure(exemplar: &Exemplar, output: &Rgb) -> Quality {
     let r = SIDE / 2;
     // Usable exemplar patches: fully inside, every pixel usable.
-    let source_centres: Vec<(usize, usize)> = (r..exemplar.height.saturating_sub(r))
+    let source: Vec<(usize, usize)> = (r..exemplar.height.saturating_sub(r))
         .flat_map(|y| (r..exemplar.width.saturating_sub(r)).map(move |x| (x, y)))
         .filter(|&(x, y)| {
             (0..SIDE).all(|dy| {
                 (0..SIDE).all(|dx| exemplar.valid[exemplar.index(x + dx - r, y + dy - r)])
             })
         })
+        .collect();
+    let outputs: Vec<(usize, usize)> = (0..output.height)
+        .flat_map(|y| (0..output.width).map(move |x| (x, y)))
         .collect();
     let source_patch = |&(x, y): &(usize, usize)| {
         patch(|dx, dy| {
@@ -66,11 +69,6 @@ pub fn measure(exemplar: &Exemplar, output: &Rgb) -> Quality {
             output.pixels[py * output.width + px]
         })
     };
-    let source: Vec<[f32; DIM]> = source_centres.iter().map(source_patch).collect();
-    let output_centres: Vec<(usize, usize)> = (0..output.height)
-        .flat_map(|y| (0..output.width).map(move |x| (x, y)))
-        .collect();
-    let outputs: Vec<[f32; DIM]> = output_centres.iter().map(output_patch).collect();
     if source.is_empty() || outputs.is_empty() {
         return Quality {
             coherence: f64::NAN,
@@ -78,12 +76,20 @@ pub fn measure(exemplar: &Exemplar, output: &Rgb) -> Quality {
             seam: seam(output),
         };
     }
-    let pca = Pca::fit(&source);
+    let pca = Pca::fit(&sample(&source).iter().map(source_patch).collect::<Vec<_>>());
     Quality {
-        coherence: mean_nearest(&pca, &outputs, &source),
-        completeness: mean_nearest(&pca, &source, &outputs),
+        coherence: mean_nearest(&pca, &sample(&outputs), output_patch, &source, source_patch),
+        completeness: mean_nearest(&pca, &sample(&source), source_patch, &outputs, output_patch),
         seam: seam(output),
     }
+}
+
+/// At most `MAX_PATCHES` of `all`, evenly spaced.
+fn sample<T: Copy>(all: &[T]) -> Vec<T> {
+    all.iter()
+        .step_by(all.len().div_ceil(MAX_PATCHES).max(1))
+        .copied()
+        .collect()
 }
 
 fn patch(pixel: impl Fn(isize, isize) -> [u8; 3]) -> [f32; DIM] {
@@ -101,28 +107,36 @@ fn patch(pixel: impl Fn(isize, isize) -> [u8; 3]) -> [f32; DIM] {
     v
 }
 
-/// Mean over (at most `MAX_PATCHES` evenly spaced) `queries` of the RMS
-/// distance to the nearest of `targets`.
-fn mean_nearest(pca: &Pca, queries: &[[f32; DIM]], targets: &[[f32; DIM]]) -> f64 {
-    let projected: Vec<[f32; PCA_DIM]> = targets.par_iter().map(|t| pca.project(t)).collect();
+/// Mean over `queries` of the RMS distance to the nearest of `targets`;
+/// patches are read from the images as needed, never all held at once.
+fn mean_nearest<Q: Sync, T: Sync>(
+    pca: &Pca,
+    queries: &[Q],
+    query_patch: impl Fn(&Q) -> [f32; DIM] + Sync,
+    targets: &[T],
+    target_patch: impl Fn(&T) -> [f32; DIM] + Sync,
+) -> f64 {
+    let projected: Vec<[f32; PCA_DIM]> = targets
+        .par_iter()
+        .map(|t| pca.project(&target_patch(t)))
+        .collect();
     let tree: ImmutableKdTree<f32, PCA_DIM> =
         ImmutableKdTree::new_from_slice(&projected).expect("a non-empty set of finite points");
-    let step = queries.len().div_ceil(MAX_PATCHES);
-    let sampled: Vec<&[f32; DIM]> = queries.iter().step_by(step).collect();
     let k = NonZero::new(CANDIDATES.min(targets.len())).expect("targets are not empty");
-    let total: f64 = sampled
+    let total: f64 = queries
         .par_iter()
         .map(|q| {
-            tree.query(&pca.project(q))
+            let q = query_patch(q);
+            tree.query(&pca.project(&q))
                 .nearest_n::<SquaredEuclidean<f32>>(k)
                 .execute()
                 .iter()
-                .map(|hit| squared(q, &targets[hit.item as usize]))
+                .map(|hit| squared(&q, &target_patch(&targets[hit.item as usize])))
                 .fold(f64::INFINITY, f64::min)
         })
         .map(|d2| (d2 / DIM as f64).sqrt())
         .sum();
-    total / sampled.len() as f64
+    total / queries.len() as f64
 }
 
 fn squared(a: &[f32; DIM], b: &[f32; DIM]) -> f64 {
@@ -139,25 +153,17 @@ struct Pca {
 }
 
 impl Pca {
-    fn fit(patches: &[[f32; DIM]]) -> Pca {
-        let step = patches.len().div_ceil(MAX_PATCHES);
-        let sample: Vec<&[f32; DIM]> = patches.iter().step_by(step).collect();
+    fn fit(sample: &[[f32; DIM]]) -> Pca {
         let n = sample.len() as f64;
         let mut mean = [0.0f64; DIM];
-        for p in &sample {
+        for p in sample {
             for (m, &x) in mean.iter_mut().zip(p.iter()) {
                 *m += x as f64 / n;
             }
         }
-        let mut cov = Mat::<f64>::zeros(DIM, DIM);
-        for p in &sample {
-            let d: Vec<f64> = p.iter().zip(&mean).map(|(&x, m)| x as f64 - m).collect();
-            for i in 0..DIM {
-                for j in 0..=i {
-                    cov[(i, j)] += d[i] * d[j] / n;
-                }
-            }
-        }
+        // Covariance as one matrix product of the centred samples.
+        let centred = Mat::<f64>::from_fn(sample.len(), DIM, |r, c| sample[r][c] as f64 - mean[c]);
+        let cov = centred.transpose() * &centred * faer::Scale(1.0 / n);
         let axes = match cov.self_adjoint_eigen(Side::Lower) {
             // Eigenvalues ascend: the last columns are the main axes.
             Ok(eigen) => std::array::from_fn(|k| {

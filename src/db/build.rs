@@ -1,0 +1,141 @@
+//! `organtex db build`: regenerate every output of the database from its
+//! sources, deterministically (same sources and parameters, same bytes),
+//! into `database/build/<id>/`, with a `report.json` of quality figures and
+//! timings per entry.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::index::{Database, Output, Tissue};
+use crate::atomic::{write_file, write_png};
+use crate::error::{Error, Result};
+use crate::progress::{CancelOnly, Progress, check};
+use crate::synth::exemplar::Exemplar;
+use crate::synth::fnpts::{SynthOptions, synthesize};
+use crate::synth::height::{exemplar_height, synthesis_height};
+use crate::synth::quality::{Quality, Rgb, measure};
+use crate::synth::{mask, vessels};
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Built {
+    pub id: String,
+    pub outputs: Vec<Output>,
+    pub usable_pixels: usize,
+    pub quality: Option<Quality>,
+    pub seconds: f64,
+}
+
+/// The exemplar an entry synthesises from: its source, cropped and masked.
+pub fn exemplar(db: &Database, t: &Tissue) -> Result<Exemplar> {
+    let source = db.root.join(&t.source);
+    let mask = t.mask.as_ref().map(|m| db.root.join(m));
+    let mut ex = Exemplar::load(&source, mask.as_deref(), t.crop)?;
+    mask::apply(&mut ex, &t.mask_rules);
+    if !ex.valid.iter().any(|&v| v) {
+        return Err(Error::format(
+            &source,
+            format!("tissue '{}': the mask rules hide every pixel", t.id),
+        ));
+    }
+    Ok(ex)
+}
+
+/// Build the entries `ids` (all when empty).
+pub fn build(db: &Database, ids: &[String], progress: &dyn Progress) -> Result<Vec<Built>> {
+    let chosen: Vec<&Tissue> = if ids.is_empty() {
+        db.tissues.iter().collect()
+    } else {
+        ids.iter().map(|id| db.tissue(id)).collect::<Result<_>>()?
+    };
+    progress.stage("database", chosen.len() as u64);
+    let quiet = CancelOnly(progress);
+    let mut built = Vec::new();
+    for t in chosen {
+        check(progress)?;
+        built.push(build_one(db, t, &quiet)?);
+        progress.advance(1);
+    }
+    Ok(built)
+}
+
+fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built> {
+    let start = Instant::now();
+    let ex = exemplar(db, t)?;
+    let dir = db.root.join("build").join(&t.id);
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let mut quality = None;
+    if let Some(p) = t
+        .synthesis
+        .as_ref()
+        .filter(|_| t.outputs.iter().any(|o| *o != Output::Overlay))
+    {
+        let opts = SynthOptions {
+            width: p.width,
+            height: p.height,
+            tileable: p.tileable,
+            seed: p.seed,
+            iterations: p.iterations,
+            levels: None,
+            neighbourhood: p.neighbourhood,
+            occurrence: SynthOptions::default().occurrence,
+        };
+        let s =
+            synthesize(&ex, &opts, progress).map_err(|e| e.in_file(&db.root.join(&t.source)))?;
+        if t.outputs.contains(&Output::Colour) {
+            let raw = s.pixels.iter().flatten().copied().collect();
+            let img =
+                image::RgbImage::from_raw(s.width as u32, s.height as u32, raw).expect("sized");
+            write_png(
+                &dir.join(Output::Colour.file_name()),
+                &image::DynamicImage::ImageRgb8(img),
+            )?;
+            quality = Some(measure(
+                &ex,
+                &Rgb {
+                    width: s.width,
+                    height: s.height,
+                    pixels: &s.pixels,
+                },
+            ));
+        }
+        if t.outputs.contains(&Output::Height) {
+            let h = synthesis_height(&exemplar_height(&ex), ex.width, &s);
+            let img = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
+                s.width as u32,
+                s.height as u32,
+                h,
+            )
+            .expect("sized");
+            write_png(
+                &dir.join(Output::Height.file_name()),
+                &image::DynamicImage::ImageLuma16(img),
+            )?;
+        }
+    }
+    if t.outputs.contains(&Output::Overlay) {
+        let side = ex.width.min(ex.height) as f32;
+        let scales: Vec<f32> = [0.0015, 0.0025, 0.004, 0.006]
+            .iter()
+            .map(|s| (s * side).max(1.0))
+            .collect();
+        let rgba = vessels::overlay(&ex, &vessels::vesselness(&ex, &scales));
+        let raw = rgba.iter().flatten().copied().collect();
+        let img =
+            image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");
+        write_png(
+            &dir.join(Output::Overlay.file_name()),
+            &image::DynamicImage::ImageRgba8(img),
+        )?;
+    }
+    let built = Built {
+        id: t.id.clone(),
+        outputs: t.outputs.clone(),
+        usable_pixels: ex.valid.iter().filter(|&&v| v).count(),
+        quality,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    let report = serde_json::to_string_pretty(&built).expect("serialises");
+    write_file(&dir.join("report.json"), |w| writeln!(w, "{report}"))?;
+    Ok(built)
+}

@@ -1,0 +1,190 @@
+//! The tissue database's index: `database/index.toml`, one `[[tissue]]`
+//! table per entry. Unknown keys and bad values are errors that name the
+//! key and the line.
+//!
+//! ```toml
+//! [[tissue]]
+//! id = "fundus-tissue"              # unique, used by scenes
+//! name = "Fundus tissue"
+//! kind = "retina"                   # tissue kind, free text
+//! source = "sources/retina.jpg"     # relative to the database folder
+//! crop = { x = 250, y = 250, width = 900, height = 900 }   # optional
+//! mask = "masks/x.png"              # optional: white usable
+//! mask_rules = ["dark", "bright", "vessels"]              # optional
+//! outputs = ["colour", "height"]    # colour, height, overlay
+//! [tissue.synthesis]                # for colour and height
+//! width = 512
+//! height = 512
+//! seed = 1
+//! iterations = 3
+//! neighbourhood = 7
+//! tileable = true
+//! ```
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::synth::exemplar::Crop;
+use crate::synth::mask::MaskRule;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IndexFile {
+    #[serde(default)]
+    tissue: Vec<Tissue>,
+}
+
+/// What a database entry produces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Output {
+    /// The tileable colour texture (FNPTS).
+    Colour,
+    /// Its height map, 16-bit, synthesised jointly.
+    Height,
+    /// An RGBA vessel overlay from the (cropped) photograph.
+    Overlay,
+}
+
+impl Output {
+    pub fn file_name(self) -> &'static str {
+        match self {
+            Output::Colour => "colour.png",
+            Output::Height => "height.png",
+            Output::Overlay => "overlay.png",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthesisParams {
+    pub width: usize,
+    pub height: usize,
+    #[serde(default)]
+    pub seed: u64,
+    #[serde(default = "default_iterations")]
+    pub iterations: usize,
+    #[serde(default = "default_neighbourhood")]
+    pub neighbourhood: usize,
+    #[serde(default = "default_true")]
+    pub tileable: bool,
+}
+
+fn default_iterations() -> usize {
+    3
+}
+fn default_neighbourhood() -> usize {
+    7
+}
+fn default_true() -> bool {
+    true
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tissue {
+    pub id: String,
+    pub name: String,
+    pub kind: String,
+    pub source: PathBuf,
+    #[serde(default)]
+    pub crop: Option<Crop>,
+    #[serde(default)]
+    pub mask: Option<PathBuf>,
+    #[serde(default)]
+    pub mask_rules: Vec<MaskRule>,
+    pub outputs: Vec<Output>,
+    #[serde(default)]
+    pub synthesis: Option<SynthesisParams>,
+}
+
+/// A database: its folder and entries.
+#[derive(Clone, Debug)]
+pub struct Database {
+    pub root: PathBuf,
+    pub tissues: Vec<Tissue>,
+}
+
+impl Database {
+    /// Read and check `root/index.toml`.
+    pub fn open(root: &Path) -> Result<Database> {
+        let path = root.join("index.toml");
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let index: IndexFile = toml::from_str(&text).map_err(|e| toml_error(&path, &text, e))?;
+        let mut seen = HashSet::new();
+        for t in &index.tissue {
+            let fail = |msg: String| Error::format(&path, format!("tissue '{}': {msg}", t.id));
+            if !seen.insert(t.id.as_str()) {
+                return Err(fail("the id is used twice".into()));
+            }
+            if t.id.is_empty()
+                || !t
+                    .id
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+            {
+                return Err(fail("ids use letters, digits, '-' and '_' only".into()));
+            }
+            for file in std::iter::once(&t.source).chain(&t.mask) {
+                if !root.join(file).is_file() {
+                    return Err(fail(format!(
+                        "{} does not exist in {}",
+                        file.display(),
+                        root.display()
+                    )));
+                }
+            }
+            let synthesised = t
+                .outputs
+                .iter()
+                .any(|o| matches!(o, Output::Colour | Output::Height));
+            if synthesised && t.synthesis.is_none() {
+                return Err(fail(
+                    "colour and height outputs need a [tissue.synthesis] table".into(),
+                ));
+            }
+            if t.outputs.is_empty() {
+                return Err(fail("no outputs".into()));
+            }
+        }
+        Ok(Database {
+            root: root.to_path_buf(),
+            tissues: index.tissue,
+        })
+    }
+
+    pub fn tissue(&self, id: &str) -> Result<&Tissue> {
+        self.tissues.iter().find(|t| t.id == id).ok_or_else(|| {
+            Error::invalid(format!(
+                "no tissue '{id}' in the database at {} (it has: {})",
+                self.root.display(),
+                self.tissues
+                    .iter()
+                    .map(|t| t.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })
+    }
+
+    /// Where `db build` writes an entry's output.
+    pub fn output_path(&self, id: &str, output: Output) -> PathBuf {
+        self.root.join("build").join(id).join(output.file_name())
+    }
+}
+
+/// A TOML error as "file:line: message (key ...)".
+fn toml_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let msg = e.message().to_string();
+    match line {
+        Some(line) => Error::at_line(path, line, msg),
+        None => Error::format(path, msg),
+    }
+}

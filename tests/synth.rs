@@ -1,0 +1,213 @@
+//! Texture synthesis on the database's real photographs: masked pixels are
+//! never copied, tileable outputs tile, heights follow the colours, vessels
+//! are found, and the same seed gives the same bytes.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use organtex::progress::Silent;
+use organtex::synth::exemplar::{Crop, Exemplar};
+use organtex::synth::fnpts::{SynthOptions, Synthesis, synthesize};
+use organtex::synth::height::{exemplar_height, synthesis_height};
+use organtex::synth::quality::{Rgb, measure, seam};
+use organtex::synth::vessels::vesselness;
+
+fn source(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("database/sources")
+        .join(name)
+}
+
+fn crop(name: &str, x: u32, y: u32, side: u32) -> Exemplar {
+    Exemplar::load(
+        &source(name),
+        None,
+        Some(Crop {
+            x,
+            y,
+            width: side,
+            height: side,
+        }),
+    )
+    .unwrap()
+}
+
+fn tileable(size: usize, seed: u64) -> SynthOptions {
+    SynthOptions {
+        width: size,
+        height: size,
+        tileable: true,
+        seed,
+        ..SynthOptions::default()
+    }
+}
+
+fn rgb(s: &Synthesis) -> Rgb<'_> {
+    Rgb {
+        width: s.width,
+        height: s.height,
+        pixels: &s.pixels,
+    }
+}
+
+#[test]
+fn no_masked_pixel_is_ever_copied() {
+    // Paint blobs of the exemplar magenta, a colour found nowhere in gravel,
+    // and mask them out.
+    let mut ex = crop("gravel.png", 0, 0, 160);
+    let magenta = [255, 0, 255];
+    assert!(!ex.pixels.contains(&magenta));
+    for y in 0..ex.height {
+        for x in 0..ex.width {
+            let blob = ((x as i64 - 40).pow(2) + (y as i64 - 50).pow(2)) < 400
+                || (x / 16 + y / 16) % 7 == 0;
+            if blob {
+                let i = ex.index(x, y);
+                ex.pixels[i] = magenta;
+                ex.valid[i] = false;
+            }
+        }
+    }
+    for seed in 0..3 {
+        let out = synthesize(&ex, &tileable(200, seed), &Silent).unwrap();
+        for (c, p) in out.coords.iter().zip(&out.pixels) {
+            assert!(
+                ex.valid[ex.index(c[0] as usize, c[1] as usize)],
+                "copied masked pixel {c:?}"
+            );
+            assert_ne!(*p, magenta);
+            assert_eq!(
+                *p,
+                ex.pixels[ex.index(c[0] as usize, c[1] as usize)],
+                "colours come from their coordinates"
+            );
+        }
+    }
+}
+
+#[test]
+fn tileable_outputs_tile_on_every_exemplar() {
+    for (name, x, y) in [
+        ("retina.jpg", 760, 200),
+        ("ihc.png", 100, 100),
+        ("gravel.png", 0, 0),
+    ] {
+        let ex = crop(name, x, y, 128);
+        for seed in 0..3 {
+            let out = synthesize(&ex, &tileable(256, seed), &Silent).unwrap();
+            let s = seam(&rgb(&out));
+            assert!(s <= 1.15, "{name} seed {seed}: seam {s}");
+        }
+    }
+}
+
+#[test]
+fn the_output_resembles_the_exemplar_more_than_noise_does() {
+    let ex = crop("ihc.png", 100, 100, 128);
+    let out = synthesize(&ex, &tileable(256, 0), &Silent).unwrap();
+    let q = measure(&ex, &rgb(&out));
+    // The same pixels shuffled: every colour right, no structure left.
+    let mut shuffled = out.pixels.clone();
+    let n = shuffled.len();
+    for i in (1..n).rev() {
+        shuffled.swap(i, organtex::rng::below(9, &[i as u64], i + 1));
+    }
+    let noise = measure(
+        &ex,
+        &Rgb {
+            width: out.width,
+            height: out.height,
+            pixels: &shuffled,
+        },
+    );
+    assert!(q.coherence < noise.coherence / 3.0, "{q:?} vs {noise:?}");
+    assert!(q.completeness < noise.completeness, "{q:?} vs {noise:?}");
+}
+
+#[test]
+fn heights_follow_the_coordinates_and_tile_too() {
+    let ex = crop("gravel.png", 100, 100, 128);
+    let out = synthesize(&ex, &tileable(192, 1), &Silent).unwrap();
+    let eh = exemplar_height(&ex);
+    let h = synthesis_height(&eh, ex.width, &out);
+    for (c, v) in out.coords.iter().zip(&h) {
+        let expected = (eh[ex.index(c[0] as usize, c[1] as usize)] * 65535.0).round() as u16;
+        assert_eq!(*v, expected);
+    }
+    // As a grey image, the height tiles like the colour.
+    let grey: Vec<[u8; 3]> = h.iter().map(|&v| [(v >> 8) as u8; 3]).collect();
+    let s = seam(&Rgb {
+        width: out.width,
+        height: out.height,
+        pixels: &grey,
+    });
+    assert!(s <= 1.15, "height seam {s}");
+    assert!(
+        h.iter().any(|&v| v > 50_000) && h.iter().any(|&v| v < 15_000),
+        "heights span their range"
+    );
+}
+
+#[test]
+fn vesselness_finds_a_dark_line_and_nothing_else() {
+    // A dark horizontal band (a vessel) on bright tissue with mild noise.
+    let (w, h) = (96, 64);
+    let pixels: Vec<[u8; 3]> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let noise = (organtex::rng::below(3, &[i as u64], 9)) as u8;
+            if (30..34).contains(&y) && (10..86).contains(&x) {
+                [120, 60 + noise, 50]
+            } else {
+                [220, 150 + noise, 120]
+            }
+        })
+        .collect();
+    let ex = Exemplar::new(w, h, pixels, vec![true; w * h]).unwrap();
+    let v = vesselness(&ex, &[1.5, 2.5]);
+    let on = v[32 * w + 48];
+    let off = (0..w * h)
+        .filter(|i| (i / w) < 20 || (i / w) > 44)
+        .map(|i| v[i])
+        .fold(0.0f32, f32::max);
+    assert!(on > 0.5, "on the vessel: {on}");
+    assert!(off < 0.1 * on, "off the vessel: {off}");
+}
+
+#[test]
+fn the_same_seed_gives_the_same_bytes_on_one_or_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut outputs = Vec::new();
+    for threads in ["1", "2", "2"] {
+        let out = dir.path().join(format!("t{}.png", outputs.len()));
+        let coords = dir.path().join(format!("c{}.png", outputs.len()));
+        let status = Command::new(env!("CARGO_BIN_EXE_organtex"))
+            .args([
+                "synth",
+                source("ihc.png").to_str().unwrap(),
+                "--crop",
+                "0,0,128,128",
+                "--size",
+                "200x150",
+                "--tileable",
+                "--seed",
+                "7",
+                "-o",
+            ])
+            .arg(&out)
+            .arg("--coords-out")
+            .arg(&coords)
+            .env("RAYON_NUM_THREADS", threads)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        outputs.push((std::fs::read(out).unwrap(), std::fs::read(coords).unwrap()));
+    }
+    assert!(outputs[0] == outputs[1] && outputs[1] == outputs[2]);
+    let other_seed = synthesize(&crop("ihc.png", 0, 0, 128), &tileable(64, 8), &Silent).unwrap();
+    let again = synthesize(&crop("ihc.png", 0, 0, 128), &tileable(64, 9), &Silent).unwrap();
+    assert_ne!(
+        other_seed.pixels, again.pixels,
+        "different seeds give different textures"
+    );
+}

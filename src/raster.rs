@@ -41,6 +41,56 @@ pub fn triangle(
     }
 }
 
+/// Barycentric weights of `p` in triangle (a, b, c), `None` when the
+/// triangle is degenerate.
+pub fn barycentric([a, b, c]: [DVec2; 3], p: DVec2) -> Option<[f64; 3]> {
+    let area = (b - a).perp_dot(c - a);
+    if area == 0.0 || !area.is_finite() {
+        return None;
+    }
+    let w0 = (c - b).perp_dot(p - b) / area;
+    let w1 = (a - c).perp_dot(p - c) / area;
+    Some([w0, w1, 1.0 - w0 - w1])
+}
+
+/// Like [`triangle`], but also every pixel whose centre lies within `pad`
+/// pixels outside the triangle, visited as `visit(x, y, outside)` with
+/// `outside` its distance past the farthest edge it is beyond (0 inside).
+/// For texture baking: texels just past a chart's edge get the colour the
+/// chart would have there, so filtering across the edge reads no
+/// background.
+pub fn triangle_padded(
+    tri: [DVec2; 3],
+    width: usize,
+    height: usize,
+    pad: f64,
+    mut visit: impl FnMut(usize, usize, f64),
+) {
+    let [a, b, c] = tri;
+    let area = (b - a).perp_dot(c - a).abs();
+    if area == 0.0 || !area.is_finite() {
+        return;
+    }
+    // Distance from the line of the edge opposite corner i per unit of w_i.
+    let heights = [(c - b).length(), (a - c).length(), (b - a).length()].map(|l| area / l);
+    let lo = a.min(b).min(c) - DVec2::splat(pad);
+    let hi = a.max(b).max(c) + DVec2::splat(pad);
+    let x0 = (lo.x - 0.5).ceil().max(0.0) as usize;
+    let y0 = (lo.y - 0.5).ceil().max(0.0) as usize;
+    let x1 = ((hi.x - 0.5).floor() + 1.0).clamp(0.0, width as f64) as usize;
+    let y1 = ((hi.y - 0.5).floor() + 1.0).clamp(0.0, height as f64) as usize;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let w = barycentric(tri, DVec2::new(x as f64 + 0.5, y as f64 + 0.5))
+                .expect("not degenerate");
+            let outside = (0..3).map(|i| -w[i] * heights[i]).fold(0.0, f64::max);
+            if outside <= pad {
+                visit(x, y, outside);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -71,6 +121,33 @@ mod tests {
             n,
             "only the diagonal pixels twice"
         );
+    }
+
+    #[test]
+    fn padding_reaches_pad_pixels_past_each_edge_and_no_farther() {
+        let tri = [
+            DVec2::new(10.0, 10.0),
+            DVec2::new(30.0, 10.0),
+            DVec2::new(10.0, 30.0),
+        ];
+        let mut inside = 0;
+        triangle(tri, 40, 40, |_, _, _| inside += 1);
+        let (mut covered, mut past) = (0, 0);
+        triangle_padded(tri, 40, 40, 2.0, |x, y, outside| {
+            covered += 1;
+            let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            // Below the bottom edge (y = 10) by exactly 10 - p.y.
+            if p.y < 10.0 && p.x > 10.0 && p.x + p.y < 40.0 {
+                assert!((outside - (10.0 - p.y)).abs() < 1e-9);
+            }
+            if outside > 0.0 {
+                past += 1;
+                assert!(outside <= 2.0);
+            }
+        });
+        assert_eq!(covered - past, inside);
+        // About two pixels' band along the 20 + 20 + 28 pixels of edge.
+        assert!((100..180).contains(&past), "{past}");
     }
 
     #[test]

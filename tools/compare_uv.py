@@ -2,7 +2,8 @@
 """Compare organtex's unwrap with xatlas and pymeshlab on the same meshes.
 
 Every tool's uv layout is written as OBJ over the original vertices and
-measured by the same code (`organtex uv-metrics`: charts, flips, conf_mean,
+measured by the same code (`organtex uv-metrics`: charts, flips, overlaps
+(faces whose uv triangle overlaps another's), conf_mean,
 area_log, seam_ratio, seam_vis, all defined in src/unwrap/metrics.rs), and
 timed in-process (organtex's report covers visibility through uv; xatlas's
 time is its parametrize call; pymeshlab's its filter).
@@ -11,7 +12,8 @@ Usage: tools/compare_uv.py [MESH ...] [--quick]
   default meshes: tests/data/bunny.obj, bunny10k_textured.obj, cube.obj and
   pymeshlab's sample cow, airplane and bone (meshes organtex is not tuned
   on); --quick: bunny10k_textured.obj only (what CI runs).
-Exits 1 if organtex flips a triangle or gives a piece more than one chart.
+Exits 1 if organtex flips a triangle, or with --split-overlaps leaves a
+face overlapping another in uv.
 """
 
 import argparse
@@ -65,11 +67,15 @@ def metrics(organtex, obj):
     return json.loads(out.stdout)
 
 
-def run_organtex(organtex, mesh, tmp):
+def run_organtex(organtex, mesh, tmp, extra=()):
     obj, report = tmp / "organtex.obj", tmp / "organtex.json"
-    subprocess.run([organtex, "unwrap", str(mesh), "-o", str(obj), "--report", str(report)], check=True, capture_output=True)
+    subprocess.run([organtex, "unwrap", str(mesh), "-o", str(obj), "--report", str(report), *extra], check=True, capture_output=True)
     r = json.loads(report.read_text())
     return r["timings"]["total_s"], metrics(organtex, obj)
+
+
+def run_organtex_split(organtex, mesh, tmp):
+    return run_organtex(organtex, mesh, tmp, ["--split-overlaps"])
 
 
 def run_xatlas(organtex, mesh, tmp):
@@ -129,7 +135,12 @@ def isolated(run, args, timeout):
         child.join()
 
 
-TOOLS = [("organtex", run_organtex), ("xatlas", run_xatlas), ("pymeshlab voronoi", run_pymeshlab_voronoi)]
+TOOLS = [
+    ("organtex", run_organtex),
+    ("organtex --split-ov", run_organtex_split),
+    ("xatlas", run_xatlas),
+    ("pymeshlab voronoi", run_pymeshlab_voronoi),
+]
 
 
 def main():
@@ -148,7 +159,7 @@ def main():
     )
 
     failures = []
-    print(f"{'mesh':<22}{'tool':<19}{'time s':>8}{'charts':>7}{'flips':>6}{'conf':>8}{'area_log':>9}{'seam_r':>8}{'seam_vis':>9}  vs xatlas")
+    print(f"{'mesh':<22}{'tool':<19}{'time s':>8}{'charts':>7}{'flips':>6}{'overlap':>8}{'conf':>8}{'area_log':>9}{'seam_r':>8}{'seam_vis':>9}  vs xatlas")
     for mesh in meshes:
         results = {}
         with tempfile.TemporaryDirectory() as tmpdir:
@@ -160,10 +171,10 @@ def main():
                 print(f"{mesh.name:<22}{name:<19}{seconds:8.2f}  {m['error']}")
                 continue
             versus = ""
-            if name == "organtex" and "error" not in x:
+            if name.startswith("organtex") and "error" not in x:
                 versus = f"seam_vis x{m['seam_vis'] / x['seam_vis']:.2f}, time x{seconds / x_time:.2f}"
             print(
-                f"{mesh.name:<22}{name:<19}{seconds:8.2f}{m['charts']:7d}{m['flips']:6d}{m['conf_mean']:8.4f}"
+                f"{mesh.name:<22}{name:<19}{seconds:8.2f}{m['charts']:7d}{m['flips']:6d}{m['overlaps']:8d}{m['conf_mean']:8.4f}"
                 f"{m['area_log']:9.3f}{m['seam_ratio']:8.2f}{m['seam_vis']:9.2f}  {versus}"
             )
         ours = results["organtex"][1]
@@ -171,6 +182,11 @@ def main():
             failures.append(f"{mesh.name}: organtex failed: {ours['error']}")
         elif ours["flips"] > 0:
             failures.append(f"{mesh.name}: organtex flipped {ours['flips']} triangles")
+        split = results["organtex --split-ov"][1]
+        if "error" in split:
+            failures.append(f"{mesh.name}: organtex --split-overlaps failed: {split['error']}")
+        elif split["overlaps"] > 0 or split["flips"] > 0:
+            failures.append(f"{mesh.name}: organtex --split-overlaps left {split['overlaps']} overlapping and {split['flips']} flipped faces")
     if failures:
         print("\nFAILED:\n  " + "\n  ".join(failures))
         sys.exit(1)

@@ -44,6 +44,11 @@ pub struct Args {
     /// mesh.
     #[arg(long)]
     repair: bool,
+    /// Split any chart whose layout overlaps itself (a fold of the boundary
+    /// over the chart) into charts that do not, as texture atlases and
+    /// painting need. Costs seams; tiled textures do not need it.
+    #[arg(long)]
+    split_overlaps: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -61,6 +66,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut opts = UnwrapOptions::default();
     opts.seams.max_stretch = args.max_stretch;
+    opts.split_overlaps = args.split_overlaps;
     opts.viewpoints = match &args.cameras {
         Some(file) => Viewpoints::Cameras(read_cameras(file)?),
         None => Viewpoints::Orbit {

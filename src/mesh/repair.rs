@@ -41,11 +41,28 @@ impl RepairReport {
     }
 }
 
+/// A repaired mesh and where its elements came from.
+pub struct Repaired {
+    pub mesh: TriMesh,
+    pub report: RepairReport,
+    /// The input vertex each output vertex copies.
+    pub vertex_origin: Vec<u32>,
+    /// The input face each output face is.
+    pub face_origin: Vec<u32>,
+}
+
 /// Repair `mesh` as the module describes; the result always builds a
 /// `Topology`.
 pub fn make_manifold(mesh: &TriMesh) -> (TriMesh, RepairReport) {
+    let r = make_manifold_traced(mesh);
+    (r.mesh, r.report)
+}
+
+/// `make_manifold`, also saying where every vertex and face came from.
+pub fn make_manifold_traced(mesh: &TriMesh) -> Repaired {
     let mut report = RepairReport::default();
-    let mut out = drop_unusable_faces(mesh, &mut report);
+    let (mut out, face_origin) = drop_unusable_faces(mesh, &mut report);
+    let mut vertex_origin: Vec<u32> = (0..mesh.num_vertices() as u32).collect();
     orient_consistently(&mut out, &mut report);
 
     let mut detached = vec![false; out.num_faces()];
@@ -71,6 +88,11 @@ pub fn make_manifold(mesh: &TriMesh) -> (TriMesh, RepairReport) {
         let n = out.num_vertices();
         let split_from = split_by_fans(&mut out.triangles, n, &fan_of_corner, num_fans);
         report.split_vertices += split_from.len();
+        let origins: Vec<u32> = split_from
+            .iter()
+            .map(|&v| vertex_origin[v as usize])
+            .collect();
+        vertex_origin.extend(origins);
         let copies: Vec<_> = split_from
             .iter()
             .map(|&v| out.positions[v as usize])
@@ -101,11 +123,17 @@ pub fn make_manifold(mesh: &TriMesh) -> (TriMesh, RepairReport) {
         }
     }
     debug_assert!(Topology::build(&out).is_ok());
-    (out, report)
+    Repaired {
+        mesh: out,
+        report,
+        vertex_origin,
+        face_origin,
+    }
 }
 
-/// Copy `mesh` without faces that repeat a vertex or repeat an earlier face.
-fn drop_unusable_faces(mesh: &TriMesh, report: &mut RepairReport) -> TriMesh {
+/// Copy `mesh` without faces that repeat a vertex or repeat an earlier face;
+/// also the input face of every kept one.
+fn drop_unusable_faces(mesh: &TriMesh, report: &mut RepairReport) -> (TriMesh, Vec<u32>) {
     let mut seen = std::collections::HashSet::new();
     let keep: Vec<bool> = mesh
         .triangles
@@ -146,7 +174,10 @@ fn drop_unusable_faces(mesh: &TriMesh, report: &mut RepairReport) -> TriMesh {
         coords: uv.coords.clone(),
         triangles: pick(&uv.triangles),
     });
-    out
+    let kept = (0..mesh.num_faces() as u32)
+        .filter(|&f| keep[f as usize])
+        .collect();
+    (out, kept)
 }
 
 /// Flip faces so that every edge with two faces is run in opposite

@@ -473,7 +473,7 @@ mod tests {
         let sphere = crate::mesh::shapes::icosphere(3);
         // Cut along a chain of edges from one pole to the other.
         let topo = Topology::build(&sphere).unwrap();
-        let graph = crate::unwrap::graph::EdgeGraph::new(&topo);
+        let graph = crate::mesh::graph::EdgeGraph::new(&topo);
         let length: Vec<f64> = (0..graph.num_edges())
             .map(|e| {
                 let [a, b] = graph.ends(crate::mesh::EdgeId::from(e));
@@ -481,7 +481,7 @@ mod tests {
             })
             .collect();
         let paths =
-            crate::unwrap::graph::ShortestPaths::from_sources(&graph, &length, &[(VertexId(0), 0)]);
+            crate::mesh::graph::ShortestPaths::from_sources(&graph, &length, &[(VertexId(0), 0)]);
         let far = (0..sphere.num_vertices())
             .max_by(|&a, &b| paths.distance[a].total_cmp(&paths.distance[b]))
             .unwrap();

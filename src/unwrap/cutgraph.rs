@@ -10,11 +10,11 @@
 //! treats a surface with holes like the closed surface with the holes
 //! capped, and yields only its 2g handle loops.
 
-use super::graph::{EdgeGraph, ShortestPaths};
 use crate::error::{Error, Result};
 use crate::mesh::dsu::DisjointSets;
 use crate::mesh::edges::EdgeTable;
 use crate::mesh::fans::{corner_fans, split_by_fans};
+use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
 
 /// Edges of the 2g shortest handle loops through `root` (empty for genus 0).

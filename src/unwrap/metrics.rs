@@ -6,6 +6,9 @@
 //! - charts: uv-connected pieces (faces joined across an edge whose two uv
 //!   ends agree on both sides);
 //! - flips: faces whose uv orientation disagrees with most of their chart;
+//! - overlaps: faces whose uv triangle overlaps another face's (not a
+//!   neighbour's) with positive area: the layout folds over itself, which
+//!   an atlas cannot hold;
 //! - conf_mean: mean sigma1 / sigma2 of the 3D-to-uv Jacobian (1 =
 //!   conformal);
 //! - area_log: mean |log(A_uv / A_3d)|;
@@ -24,6 +27,7 @@ use crate::mesh::{EdgeId, Topology, TriMesh, UvLayer};
 pub struct UvMetrics {
     pub charts: usize,
     pub flips: usize,
+    pub overlaps: usize,
     /// Faces whose uv triangle has no area.
     pub degenerate: usize,
     pub conf_mean: f64,
@@ -142,6 +146,11 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
     }
     let flips = (0..charts).map(|c| positive[c].min(negative[c])).sum();
     let degenerate = jac.iter().filter(|j| j.2 == 0.0).count();
+    let mut overlapping = vec![false; nf];
+    for [f, g] in super::overlap::overlapping_pairs(&layer.triangles, &layer.coords) {
+        overlapping[f as usize] = true;
+        overlapping[g as usize] = true;
+    }
 
     let mut conf = 0.0;
     let mut conf_weight = 0.0;
@@ -159,15 +168,20 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
         let [a, b] = topo.edge_vertices(e);
         (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
     };
-    let seam_length: f64 = seams.iter().map(|&e| edge_length(e)).sum();
-    let seam_vis: f64 = seams
+    // fold from +0.0: an empty f64 sum is -0.0.
+    let seam_length = seams
+        .iter()
+        .map(|&e| edge_length(e))
+        .fold(0.0, |a, b| a + b);
+    let seam_vis = seams
         .iter()
         .map(|&e| edge_length(e) * edge_visibility[e.idx()] as f64)
-        .sum();
+        .fold(0.0, |a, b| a + b);
     let root_area = total_3d.sqrt();
     Some(UvMetrics {
         charts,
         flips,
+        overlaps: overlapping.iter().filter(|&&o| o).count(),
         degenerate,
         conf_mean: if conf_weight > 0.0 {
             conf / conf_weight

@@ -12,9 +12,9 @@ pub mod conformal;
 pub mod cutgraph;
 pub mod debug;
 pub mod flatten;
-pub mod graph;
 pub mod layout;
 pub mod metrics;
+pub mod overlap;
 pub mod seamster;
 pub mod steiner;
 pub mod terminals;
@@ -42,6 +42,10 @@ pub struct UnwrapOptions {
     pub viewpoints: Viewpoints,
     pub seams: SeamOptions,
     pub abf: AbfOptions,
+    /// Split a chart whose layout overlaps itself into charts that do not
+    /// (`overlap`): needed by atlases, not by tiled textures, and costs
+    /// seams, so off by default.
+    pub split_overlaps: bool,
 }
 
 impl Default for UnwrapOptions {
@@ -50,19 +54,25 @@ impl Default for UnwrapOptions {
             viewpoints: Viewpoints::Orbit { views: 128 },
             seams: SeamOptions::default(),
             abf: AbfOptions::default(),
+            split_overlaps: false,
         }
     }
 }
 
+/// How one connected piece was unwrapped.
 #[derive(Clone, Debug, Serialize)]
-pub struct ChartReport {
+pub struct PieceReport {
     pub faces: usize,
     pub genus: i64,
     pub boundary_loops: usize,
     pub terminals: usize,
     pub refinement_rounds: usize,
     pub seam_edges: usize,
-    pub flattening: Method,
+    /// Charts: 1, or more when a flattening overlapped itself and was split
+    /// (`overlap`).
+    pub charts: usize,
+    /// How each chart was flattened.
+    pub flattening: Vec<Method>,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -76,7 +86,7 @@ pub struct Timings {
 #[derive(Clone, Debug, Serialize)]
 pub struct UnwrapReport {
     pub views: usize,
-    pub charts: Vec<ChartReport>,
+    pub pieces: Vec<PieceReport>,
     pub metrics: UvMetrics,
     pub timings: Timings,
 }
@@ -96,12 +106,14 @@ pub struct Unwrapped {
 /// One connected piece, unwrapped, in the piece's own numbering.
 struct PieceResult {
     faces: Vec<FaceId>,
+    /// Mesh vertex of every piece vertex.
     origin: Vec<u32>,
+    /// Uv vertices of every piece face.
     cut_triangles: Vec<[u32; 3]>,
     uv: Vec<DVec2>,
     seams: Vec<[u32; 2]>,
     terminals: Vec<u32>,
-    report: ChartReport,
+    report: PieceReport,
     seams_s: f64,
     flatten_s: f64,
 }
@@ -113,6 +125,23 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions, progress: &dyn Progress) -> 
     let topology = Topology::build(mesh)?;
     let visibility = visibility::compute(mesh, &topology, &opts.viewpoints, progress);
     let visibility_s = start.elapsed().as_secs_f64();
+    let mut out = unwrap_seen(mesh, topology, visibility, opts, progress)?;
+    out.report.timings.visibility_s = visibility_s;
+    out.report.timings.total_s += visibility_s;
+    Ok(out)
+}
+
+/// `unwrap` with visibility already known (by `topology`'s vertices and
+/// edges): a piece of a larger scene is seen, and hidden, with the rest of
+/// the scene around it.
+pub fn unwrap_seen(
+    mesh: &TriMesh,
+    topology: Topology,
+    visibility: Visibility,
+    opts: &UnwrapOptions,
+    progress: &dyn Progress,
+) -> Result<Unwrapped> {
+    let start = Instant::now();
 
     let components = Components::find(&topology);
     let mut faces_of: Vec<Vec<FaceId>> = vec![Vec::new(); components.count];
@@ -144,15 +173,12 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions, progress: &dyn Progress) -> 
         .collect::<Result<_>>()?;
 
     // One uv layer: every piece's cut vertices, charts side by side.
-    let offsets = pack(&pieces);
+    let offsets = pack(&pieces.iter().map(|p| extent(&p.uv)).collect::<Vec<_>>());
     let mut coords = Vec::new();
     let mut uv_triangles = vec![[0u32; 3]; mesh.num_faces()];
     let mut seams = Vec::new();
     let mut terminals = Vec::new();
-    let mut timings = Timings {
-        visibility_s,
-        ..Timings::default()
-    };
+    let mut timings = Timings::default();
     for (piece, offset) in pieces.iter().zip(offsets) {
         let base = coords.len() as u32;
         coords.extend(piece.uv.iter().map(|&u| u + offset));
@@ -184,7 +210,7 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions, progress: &dyn Progress) -> 
     Ok(Unwrapped {
         report: UnwrapReport {
             views: visibility.views,
-            charts: pieces.into_iter().map(|p| p.report).collect(),
+            pieces: pieces.into_iter().map(|p| p.report).collect(),
             metrics,
             timings,
         },
@@ -231,7 +257,7 @@ fn unwrap_piece(
 
     let t1 = Instant::now();
     progress.stage("flatten", 1);
-    let chart = TriMesh::new(
+    let cut_surface = TriMesh::new(
         seams
             .cut
             .origin
@@ -240,35 +266,78 @@ fn unwrap_piece(
             .collect(),
         seams.cut.triangles.clone(),
     );
-    let chart_topo = Topology::build(&chart)?;
-    let flat = flatten::flatten(&chart, &chart_topo, &opts.abf)?;
-    let uv = normalise(&chart, flat.uv);
+    let charts = overlap::flatten_charts(&cut_surface, &opts.abf, opts.split_overlaps)?;
+    // Each chart at mesh scale, side by side: one uv layer for the piece.
+    let normalised: Vec<Vec<DVec2>> = charts
+        .iter()
+        .map(|c| {
+            let positions = c
+                .origin
+                .iter()
+                .map(|&v| cut_surface.positions[v as usize])
+                .collect();
+            normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
+        })
+        .collect();
+    let offsets = pack(&normalised.iter().map(|uv| extent(uv)).collect::<Vec<_>>());
+    let mut uv = Vec::new();
+    let mut cut_triangles = vec![[0u32; 3]; faces.len()];
+    for ((chart, chart_uv), offset) in charts.iter().zip(&normalised).zip(offsets) {
+        let base = uv.len() as u32;
+        uv.extend(chart_uv.iter().map(|&u| u + offset));
+        for (k, &f) in chart.faces.iter().enumerate() {
+            cut_triangles[f as usize] = chart.triangles[k].map(|v| v + base);
+        }
+    }
     let flatten_s = t1.elapsed().as_secs_f64();
     progress.advance(1);
 
+    let seam_edges = cut_edges(&topo, &cut_triangles);
     Ok(PieceResult {
-        report: ChartReport {
+        report: PieceReport {
             faces: faces.len(),
             genus: component.genus,
             boundary_loops: component.boundary_loops,
             terminals: seams.terminals.len(),
             refinement_rounds: seams.rounds,
-            seam_edges: seams.edges.len(),
-            flattening: flat.method,
+            seam_edges: seam_edges.len(),
+            charts: charts.len(),
+            flattening: charts.into_iter().map(|c| c.method).collect(),
         },
         faces,
-        seams: seams
-            .edges
+        seams: seam_edges
             .iter()
             .map(|&e| topo.edge_vertices(e).map(|v| v.0))
             .collect(),
         terminals: seams.terminals.iter().map(|t| t.0).collect(),
-        cut_triangles: seams.cut.triangles,
+        cut_triangles,
         origin,
         uv,
         seams_s,
         flatten_s,
     })
+}
+
+/// Interior edges of `topo` whose two faces give an end different uv
+/// vertices: the Seamster cut and any chart splits.
+fn cut_edges(topo: &Topology, cut_triangles: &[[u32; 3]]) -> Vec<EdgeId> {
+    (0..topo.num_edges())
+        .map(EdgeId::from)
+        .filter(|&e| {
+            let h = topo.edge_halfedge(e);
+            let Some(t) = topo.twin(h) else { return false };
+            // h runs a -> b in its face, t runs b -> a in its own.
+            let (f, i) = (h.idx() / 3, h.idx() % 3);
+            let (g, j) = (t.idx() / 3, t.idx() % 3);
+            cut_triangles[f][i] != cut_triangles[g][(j + 1) % 3]
+                || cut_triangles[f][(i + 1) % 3] != cut_triangles[g][j]
+        })
+        .collect()
+}
+
+/// The upper-right corner of uvs that start at the origin.
+fn extent(uv: &[DVec2]) -> DVec2 {
+    uv.iter().fold(DVec2::ZERO, |m, &u| m.max(u))
 }
 
 /// Scale a chart's uvs so its uv area equals its 3D area, and move its
@@ -289,19 +358,18 @@ fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
     uv.into_iter().map(|u| (u - lo) * scale).collect()
 }
 
-/// Place charts left to right in rows (shelf packing), tallest first, with
-/// a margin: returns each chart's offset.
-fn pack(pieces: &[PieceResult]) -> Vec<DVec2> {
-    let size = |p: &PieceResult| p.uv.iter().fold(DVec2::ZERO, |m, &u| m.max(u));
-    let sizes: Vec<DVec2> = pieces.iter().map(size).collect();
+/// Place boxes of `sizes` (charts, or pieces of charts) left to right in
+/// rows (shelf packing), tallest first, with a margin: returns each one's
+/// offset.
+fn pack(sizes: &[DVec2]) -> Vec<DVec2> {
     let total_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
     let row_width = total_area
         .sqrt()
         .max(sizes.iter().map(|s| s.x).fold(0.0, f64::max));
     let margin = 0.02 * row_width;
-    let mut order: Vec<usize> = (0..pieces.len()).collect();
+    let mut order: Vec<usize> = (0..sizes.len()).collect();
     order.sort_by(|&a, &b| sizes[b].y.total_cmp(&sizes[a].y).then(a.cmp(&b)));
-    let mut offsets = vec![DVec2::ZERO; pieces.len()];
+    let mut offsets = vec![DVec2::ZERO; sizes.len()];
     let (mut x, mut y, mut row_height) = (0.0, 0.0, 0.0f64);
     for i in order {
         if x > 0.0 && x + sizes[i].x > row_width {

@@ -24,11 +24,11 @@ use std::f64::consts::PI;
 
 use super::conformal;
 use super::cutgraph::{Cut, assert_disks, cut, handle_loops};
-use super::graph::{EdgeGraph, ShortestPaths};
 use super::steiner;
 use super::terminals::{disc_curvature, select};
 use crate::error::Result;
 use crate::mesh::curvature::Curvature;
+use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
 use crate::progress::{Progress, check};
 

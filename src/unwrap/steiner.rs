@@ -14,8 +14,8 @@
 
 use std::collections::HashMap;
 
-use super::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::dsu::DisjointSets;
+use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::{EdgeId, VertexId};
 
 /// Edges of an approximate minimal Steiner tree joining every group, none

@@ -12,8 +12,8 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::graph::{DiscScratch, EdgeGraph, disc};
 use crate::mesh::VertexId;
+use crate::mesh::graph::{DiscScratch, EdgeGraph, disc};
 
 /// Disc-summed curvature of every vertex: |sum of `defect` over its disc
 /// of `radius`|.

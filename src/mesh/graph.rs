@@ -5,7 +5,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use crate::mesh::{EdgeId, Topology, VertexId};
+use super::{EdgeId, Topology, VertexId};
 
 /// Vertices and their incident edges, compressed (CSR).
 pub struct EdgeGraph {

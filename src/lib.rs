@@ -6,6 +6,7 @@
 
 pub mod atomic;
 pub mod bench;
+pub mod blend;
 pub mod db;
 pub mod error;
 pub mod linalg;
@@ -13,6 +14,7 @@ pub mod mesh;
 pub mod progress;
 pub mod raster;
 pub mod rng;
+pub mod scene;
 pub mod synth;
 pub mod unwrap;
 

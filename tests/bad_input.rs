@@ -475,3 +475,101 @@ fn database_errors_name_the_key_and_line() {
     let (ok, _, stderr) = organtex(&["db", "--database", db, "build", "nosuch"]);
     assert!(!ok && stderr.contains("no tissue 'nosuch'"), "{stderr}");
 }
+
+#[test]
+fn bake_refuses_bad_scenes_clearly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    let out = dir.path().join("out");
+    let out_arg = out.to_str().unwrap();
+    let scene = dir.path().join("scene.toml");
+    let write =
+        |body: &str| std::fs::write(&scene, format!("database = {database:?}\n{body}")).unwrap();
+    let node = "[[node]]\nname = \"organ\"\nmesh = { file = \"organ.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
+
+    write(node);
+    check_refused(
+        "mesh not found",
+        &scene,
+        "line 4: node 'organ': mesh.file:",
+        &["bake", scene.to_str().unwrap(), "-o", out_arg],
+    );
+    std::fs::write(
+        dir.path().join("organ.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    write(&node.replace("gravel", "granite"));
+    check_refused(
+        "unknown tissue",
+        &scene,
+        "line 7: node 'organ': facet '*' texture: 'granite' is not in the tissue database",
+        &["bake", scene.to_str().unwrap(), "-o", out_arg],
+    );
+    write(&format!("{node}overlap = -2\n"));
+    check_refused(
+        "negative overlap",
+        &scene,
+        "line 8: node 'organ': facet '*' overlap: must be 0 or more, not -2",
+        &["bake", scene.to_str().unwrap(), "-o", out_arg],
+    );
+    write(&format!("include = [\"scene.toml\"]\n{node}"));
+    check_refused(
+        "self include",
+        &scene,
+        "line 2: include: the scene includes itself",
+        &["bake", scene.to_str().unwrap(), "-o", out_arg],
+    );
+    write(&format!("{node}colour = \"red\"\n"));
+    check_refused(
+        "unknown key",
+        &scene,
+        "line 8: unknown field `colour`",
+        &["bake", scene.to_str().unwrap(), "-o", out_arg],
+    );
+    assert!(!out.exists(), "a refused bake created its output folder");
+    let (ok, _, stderr) = organtex(&[
+        "bake",
+        scene.to_str().unwrap(),
+        "-o",
+        out_arg,
+        "--atlas",
+        "17",
+    ]);
+    assert!(!ok && stderr.contains("--atlas"), "{stderr}");
+}
+
+/// Ctrl-C during a bake stops it at the next safe point: exit code 130 and
+/// nothing in the output folder but what was there before.
+#[test]
+fn an_interrupted_bake_leaves_no_file_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "mine").unwrap();
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join("bunny.toml");
+    let child = Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(["bake", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Long enough for the handler to be installed, well before the bunny's
+    // two-second bake ends.
+    std::thread::sleep(std::time::Duration::from_millis(400));
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("cancelled"), "{stderr}");
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["keep.txt"]);
+}

@@ -25,6 +25,7 @@ need_apt() {
 rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup component add rustfmt
 rustup component list --installed 2>/dev/null | grep -q '^clippy' || rustup component add clippy
 python3 -c 'import venv, ensurepip' 2>/dev/null || need_apt python3-venv
+command -v npm >/dev/null 2>&1 || need_apt nodejs npm
 
 step "cargo fmt --check"
 cargo fmt --check
@@ -40,5 +41,8 @@ python3 tools/crosscheck.py --organtex target/release/organtex
 
 step "tools/compare_uv.py --quick (organtex unwrap vs xatlas and pymeshlab)"
 python3 tools/compare_uv.py --quick --organtex target/release/organtex
+
+step "tools/check_bakes.py (every scene baked, Khronos glTF validator, trimesh)"
+python3 tools/check_bakes.py --organtex target/release/organtex
 
 step "all checks passed"

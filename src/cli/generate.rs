@@ -17,6 +17,9 @@ enum Shape {
     Cylinder,
     /// Unit icosphere, genus 0.
     Sphere,
+    /// A uterine cavity seen from inside, with two myomas and a polyp (the
+    /// default hysteroscopy scene's organ), facets per growth.
+    Uterus,
 }
 
 #[derive(clap::Args)]
@@ -38,6 +41,8 @@ pub fn run(args: Args) -> Result<()> {
         Shape::DoubleTorus => shapes::holed_slab(2, r + 1, 4),
         Shape::Cylinder => shapes::open_cylinder(0.5, 1.5, 12 * r, 4 * r),
         Shape::Sphere => shapes::icosphere(r),
+        Shape::Uterus => organtex::scene::uterus::generate(&organtex::scene::uterus::demo())
+            .map_err(|e| Error::invalid(format!("{}: {}", e.key, e.msg)))?,
     };
     if args.output.extension().and_then(|e| e.to_str()) != Some("obj") {
         return Err(Error::format(

@@ -27,17 +27,6 @@ pub struct Args {
     curvature_out: Option<PathBuf>,
 }
 
-impl Args {
-    pub fn for_file(file: PathBuf) -> Args {
-        Args {
-            file,
-            json: false,
-            repair: false,
-            curvature_out: None,
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<()> {
     let mesh = io::read(&args.file)?;
     let analysis = analyse(mesh, args.repair).map_err(|e| e.in_file(&args.file))?;

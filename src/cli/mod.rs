@@ -1,13 +1,16 @@
 //! Argument definitions and dispatch.
 
+mod bake;
 mod bench;
 mod db;
 mod generate;
 mod info;
-mod progress;
+pub mod progress;
 mod synth;
 mod unwrap;
 mod uv_metrics;
+
+use std::path::Path;
 
 use clap::{Parser, Subcommand};
 
@@ -15,7 +18,8 @@ use organtex::Result;
 
 /// Automatic texturing of organ scenes for surgical simulators.
 ///
-/// With no command, prints `info` for the bundled Stanford bunny.
+/// With no command, bakes the bundled hysteroscopy scene
+/// (scenes/hysteroscopy_myomas.toml) into out/.
 #[derive(Parser)]
 #[command(name = "organtex", version, about, long_about = None)]
 pub struct Cli {
@@ -25,6 +29,10 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Bake a scene (scenes/README.md): every facet cut, flattened and
+    /// textured with its tissue, seams and facet borders blended; writes
+    /// DIR/scene.glb, DIR/report.json and DIR/preview.png.
+    Bake(bake::Args),
     /// Describe a mesh: counts, facets, components, genus, boundary loops,
     /// defects, bounds, area, volume and curvature statistics.
     Info(info::Args),
@@ -50,6 +58,7 @@ enum Command {
 
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Some(Command::Bake(args)) => bake::run(args),
         Some(Command::Info(args)) => info::run(args),
         Some(Command::Bench(args)) => bench::run(args),
         Some(Command::Generate(args)) => generate::run(args),
@@ -58,12 +67,14 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Synth(args)) => synth::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
-        None => info::run(info::Args::for_file(
-            organtex::bench::default_root()
-                .join("tests")
-                .join("data")
-                .join("bunny.obj"),
-        )),
+        None => {
+            let root = organtex::bench::default_root();
+            bake::bake_and_print(
+                &root.join("scenes").join("hysteroscopy_myomas.toml"),
+                Path::new("out"),
+                None,
+            )
+        }
     }
 }
 

@@ -1,9 +1,26 @@
-//! Progress bars for the library's long stages (indicatif).
+//! Progress bars for the library's long stages (indicatif), and Ctrl-C as
+//! cancellation: the first interrupt asks the running stage to stop at its
+//! next safe point (so no half-written output is left), a second one quits
+//! at once.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use organtex::progress::Progress;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Route Ctrl-C to [`Bars::cancelled`]. Call once, at start-up.
+pub fn catch_interrupts() {
+    // Failing to install the handler only loses graceful cancellation.
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: stopping at the next safe point (Ctrl-C again to quit now)");
+    });
+}
 
 /// One bar per stage; a new stage finishes the previous bar. Hidden when
 /// stderr is not a terminal (indicatif's default), so logs stay clean.
@@ -45,5 +62,9 @@ impl Progress for Bars {
         if let Some(bar) = self.current.lock().expect("progress lock").as_ref() {
             bar.inc(n);
         }
+    }
+
+    fn cancelled(&self) -> bool {
+        INTERRUPTED.load(Ordering::Relaxed)
     }
 }

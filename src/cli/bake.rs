@@ -1,0 +1,100 @@
+//! `organtex bake SCENE -o DIR [--atlas SIZE]`.
+
+use std::path::PathBuf;
+
+use organtex::Result;
+use organtex::scene::bake::{BakeOptions, Baked, bake};
+
+use super::progress::Bars;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (.toml; format in scenes/README.md).
+    scene: PathBuf,
+    /// Folder for scene.glb, report.json and preview.png (created if
+    /// missing; files already there are replaced only when the bake
+    /// succeeds).
+    #[arg(short, long, value_name = "DIR")]
+    output: PathBuf,
+    /// Bake each facet into one SIZE x SIZE texture with the seam blend,
+    /// facet blend and overlay composited in, for engines that draw no alpha
+    /// layers. Without it, the .glb holds tiled tissue textures with
+    /// KHR_texture_transform and blended layers with vertex alpha.
+    #[arg(long, value_name = "SIZE", value_parser = clap::value_parser!(u32).range(64..=16384))]
+    atlas: Option<u32>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    bake_and_print(&args.scene, &args.output, args.atlas.map(|s| s as usize))
+}
+
+pub fn bake_and_print(
+    scene: &std::path::Path,
+    out: &std::path::Path,
+    atlas: Option<usize>,
+) -> Result<()> {
+    let opts = BakeOptions {
+        atlas,
+        ..BakeOptions::default()
+    };
+    let bars = Bars::new();
+    let result = bake(scene, out, &opts, &bars);
+    bars.finish();
+    print(&result?);
+    Ok(())
+}
+
+fn figure(x: Option<f64>) -> String {
+    x.map_or("-".into(), |x| format!("{x:.2}"))
+}
+
+fn print(baked: &Baked) {
+    let r = &baked.report;
+    println!(
+        "scene {} ({} mode), baked in {:.1} s",
+        r.scene, r.mode, r.timings.total_s
+    );
+    println!(
+        "  {:<24} {:<16} {:>7} {:>6} {:>8} {:>7} {:>10}",
+        "facet", "tissue", "faces", "charts", "seam", "conf", "seam blend"
+    );
+    for f in &r.facets {
+        println!(
+            "  {:<24} {:<16} {:>7} {:>6} {:>8.1} {:>7.3} {:>5} <- {}",
+            format!("{}/{}", f.facet.node, f.facet.facet),
+            f.facet.texture,
+            f.facet.faces,
+            f.facet.charts,
+            f.facet.seam_length,
+            f.facet.metrics.conf_mean,
+            figure(f.seam_contrast),
+            figure(f.seam_contrast_unblended),
+        );
+    }
+    for b in &r.borders {
+        if b.border_contrast.is_some() {
+            println!(
+                "  {} facet borders: contrast {} (unblended {})",
+                b.node,
+                figure(b.border_contrast),
+                figure(b.border_contrast_unblended)
+            );
+        }
+    }
+    println!(
+        "  contrast: colour jump across seams/borders over that across ordinary edges (1 = invisible)"
+    );
+    if let Some(density) = r.atlas_density
+        && density < r.texture_density / 2.0
+    {
+        let size = r.atlas_size.unwrap_or(0) as f64 * r.texture_density / density;
+        println!(
+            "  note: the atlases hold {density:.1} texels per unit, the finest tissue texture {:.1}: it is blurred (--atlas {} keeps its detail)",
+            r.texture_density,
+            (size as usize).next_power_of_two()
+        );
+    }
+    println!("wrote {}", baked.glb.display());
+    println!("      {}", baked.report_json.display());
+    println!("      {}", baked.preview.display());
+}

@@ -1,0 +1,219 @@
+//! Atlas baking: each facet's own faces rasterised in its uv charts, every
+//! texel the colour the compositor gives that point (tiled texture, overlay,
+//! seam bands, rings of later facets, all blended in), for engines that
+//! draw no alpha layers. The charts must not overlap (the bake unwraps with
+//! `split_overlaps` for atlases).
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::build::{BakedFacet, BakedNode};
+use super::composite::{Compositor, linear_to_srgb};
+use crate::raster;
+
+/// A facet's baked texture and where its chart sits in it.
+#[derive(Clone, Debug)]
+pub struct Atlas {
+    pub size: usize,
+    /// sRGB, row by row from the top.
+    pub pixels: Vec<[u8; 3]>,
+    lo: DVec2,
+    scale: f64,
+    margin: f64,
+}
+
+impl Atlas {
+    /// Texture coordinates (0..1, v down) of chart uv `uv`.
+    pub fn texcoord(&self, uv: DVec2) -> DVec2 {
+        (uv - self.lo) * self.scale + DVec2::splat(self.margin)
+    }
+
+    /// Bilinear sample at chart uv `uv`, in sRGB 0-255.
+    pub fn sample(&self, uv: DVec2) -> [f64; 3] {
+        let t = self.texcoord(uv) * self.size as f64 - DVec2::splat(0.5);
+        let (x0, y0) = (t.x.floor(), t.y.floor());
+        let (fx, fy) = (t.x - x0, t.y - y0);
+        let at = |x: f64, y: f64| {
+            let xi = (x as i64).clamp(0, self.size as i64 - 1) as usize;
+            let yi = (y as i64).clamp(0, self.size as i64 - 1) as usize;
+            self.pixels[yi * self.size + xi]
+        };
+        let c = [
+            at(x0, y0),
+            at(x0 + 1.0, y0),
+            at(x0, y0 + 1.0),
+            at(x0 + 1.0, y0 + 1.0),
+        ];
+        std::array::from_fn(|i| {
+            let top = c[0][i] as f64 * (1.0 - fx) + c[1][i] as f64 * fx;
+            let bottom = c[2][i] as f64 * (1.0 - fx) + c[3][i] as f64 * fx;
+            top * (1.0 - fy) + bottom * fy
+        })
+    }
+}
+
+/// The corners of the box holding `facet`'s own faces' charts (uv units
+/// are mesh units).
+fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
+    let piece = &facet.piece;
+    let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
+    let corners = layer.triangles[..piece.own]
+        .iter()
+        .flatten()
+        .map(|&c| layer.coords[c as usize]);
+    corners.fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
+}
+
+fn extent(f: &BakedFacet) -> f64 {
+    let (lo, hi) = chart_box(f);
+    (hi - lo).max_element().max(0.0)
+}
+
+/// The widest facet's chart box side, in mesh units.
+fn widest_chart(nodes: &[BakedNode]) -> f64 {
+    nodes
+        .iter()
+        .flat_map(|n| n.facets.iter().map(extent))
+        .fold(0.0, f64::max)
+}
+
+/// Atlas texels per mesh unit when the widest facet gets `largest`.
+pub fn density(nodes: &[BakedNode], largest: usize) -> f64 {
+    largest as f64 / widest_chart(nodes).max(1e-300)
+}
+
+/// Atlas sides, per node per facet, for one texel density across the scene:
+/// the widest facet gets `largest` texels, the others in proportion (at
+/// least 64), so a tissue seen across a facet border is equally sharp on
+/// both sides.
+pub fn sizes(nodes: &[BakedNode], largest: usize) -> Vec<Vec<usize>> {
+    let widest = widest_chart(nodes);
+    nodes
+        .iter()
+        .map(|n| {
+            n.facets
+                .iter()
+                .map(|f| {
+                    let share = if widest > 0.0 {
+                        extent(f) / widest
+                    } else {
+                        1.0
+                    };
+                    ((largest as f64 * share).ceil() as usize).clamp(64.min(largest), largest)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Bake `facet`'s atlas, `size` texels square, from `compositor`.
+pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size: usize) -> Atlas {
+    let piece = &facet.piece;
+    let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
+    let (lo, hi) = chart_box(facet);
+    // Four texels of margin, for filtering across the chart's edge.
+    let margin = 4.0 / size as f64;
+    let scale = (1.0 - 2.0 * margin) / (hi - lo).max_element().max(1e-300);
+    let mut atlas = Atlas {
+        size,
+        pixels: vec![[0, 0, 0]; size * size],
+        lo,
+        scale,
+        margin,
+    };
+    let texel_uv: Vec<[DVec2; 3]> = (0..piece.own)
+        .map(|f| layer.triangles[f].map(|c| atlas.texcoord(layer.coords[c as usize]) * size as f64))
+        .collect();
+    // Each texel's face: the one holding its centre, else the nearest one
+    // within PAD texels (the texel then shows the chart continued past its
+    // edge). Ties go to the lower face number, so the result is the same
+    // whatever the order. Coverage is cheap; colours are the cost, so they
+    // are computed once per texel, in parallel, below.
+    const PAD: f64 = 2.0;
+    let mut best = vec![(f32::INFINITY, u32::MAX); size * size];
+    for (f, &tri) in texel_uv.iter().enumerate() {
+        raster::triangle_padded(tri, size, size, PAD, |x, y, outside| {
+            let candidate = (outside as f32, f as u32);
+            let slot = &mut best[y * size + x];
+            if candidate < *slot {
+                *slot = candidate;
+            }
+        });
+    }
+    let node_order: Vec<[usize; 3]> = (0..piece.own)
+        .map(|f| {
+            let node_tri = node.mesh.triangles[piece.face_origin[f] as usize];
+            piece.mesh.triangles[f].map(|v| {
+                let o = piece.vertex_origin[v as usize];
+                node_tri
+                    .iter()
+                    .position(|&n| n == o)
+                    .expect("a piece face is its node face")
+            })
+        })
+        .collect();
+    atlas
+        .pixels
+        .par_chunks_mut(size)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, pixel) in row.iter_mut().enumerate() {
+                let (_, f) = best[y * size + x];
+                if f == u32::MAX {
+                    continue;
+                }
+                let f = f as usize;
+                let centre = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                let Some(w) = raster::barycentric(texel_uv[f], centre) else {
+                    continue;
+                };
+                let mut node_w = [0.0; 3];
+                for i in 0..3 {
+                    node_w[node_order[f][i]] = w[i];
+                }
+                let c = compositor.colour(piece.face_origin[f] as usize, node_w);
+                *pixel = c.map(|v| (linear_to_srgb(v) * 255.0).round() as u8);
+            }
+        });
+    let mut covered: Vec<bool> = best.iter().map(|&(_, f)| f != u32::MAX).collect();
+    dilate(&mut atlas.pixels, &mut covered, size, 4);
+    atlas
+}
+
+/// Spread covered texels into uncovered neighbours, `steps` times, so
+/// filtering at chart edges never reads background.
+fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], size: usize, steps: usize) {
+    for _ in 0..steps {
+        let before = covered.to_vec();
+        let source = pixels.to_vec();
+        for y in 0..size {
+            for x in 0..size {
+                let i = y * size + x;
+                if before[i] {
+                    continue;
+                }
+                let mut sum = [0u32; 3];
+                let mut n = 0;
+                for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                    let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                    if nx >= 0 && ny >= 0 && (nx as usize) < size && (ny as usize) < size {
+                        let j = ny as usize * size + nx as usize;
+                        if before[j] {
+                            for c in 0..3 {
+                                sum[c] += source[j][c] as u32;
+                            }
+                            n += 1;
+                        }
+                    }
+                }
+                if n > 0 {
+                    pixels[i] = sum.map(|s| (s / n) as u8);
+                    covered[i] = true;
+                }
+            }
+        }
+    }
+}

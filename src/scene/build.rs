@@ -1,0 +1,448 @@
+//! From a scene file to baked facets: every node's mesh, its facets cut
+//! into pieces with overlap rings, each piece unwrapped (seams seen from the
+//! scene's cameras, the rest of the node hiding them), its seam bands, and
+//! the layers every face shows (the compositor). Writing the .glb, atlases
+//! and preview reads from here.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Instant;
+
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::composite::{Band, Compositor, Layer, Look, Overlay, Texture, Transform};
+use super::file::{FacetSettings, MeshSpec, NodeSpec, SceneSpec, check_tissues};
+use super::uterus;
+use crate::blend::overlap::{FacetPiece, facet_pieces};
+use crate::blend::seam::{BandFace, seam_bands};
+use crate::db::{self, Database, Output};
+use crate::error::{Error, Result};
+use crate::mesh::repair::make_manifold;
+use crate::mesh::{EdgeId, Facets, Topology, TriMesh, io};
+use crate::progress::{CancelOnly, Progress, check};
+use crate::unwrap::flatten::Method;
+use crate::unwrap::metrics::UvMetrics;
+use crate::unwrap::visibility::{self, Viewpoints, Visibility};
+use crate::unwrap::{UnwrapOptions, unwrap_seen};
+
+/// One facet, unwrapped, with its seam bands.
+pub struct BakedFacet {
+    pub settings: FacetSettings,
+    /// The facet's piece, its mesh carrying the uvs.
+    pub piece: FacetPiece,
+    pub band: Vec<BandFace>,
+    pub report: FacetReport,
+}
+
+/// A node with its baked facets and what every face shows.
+pub struct BakedNode {
+    pub name: String,
+    pub mesh: TriMesh,
+    pub topology: Topology,
+    /// Area-weighted vertex normals of the node (shared by its facets, so
+    /// shading is smooth across facet borders).
+    pub normals: Vec<DVec3>,
+    pub facets: Vec<BakedFacet>,
+    pub compositor: Compositor,
+    /// The same without seam bands and overlap rings, for comparison.
+    pub unblended: Compositor,
+}
+
+/// Where each database output used lives, by tissue id.
+#[derive(Clone, Debug, Default)]
+pub struct Tissues {
+    pub colour: HashMap<String, std::path::PathBuf>,
+    pub height: HashMap<String, std::path::PathBuf>,
+    pub overlay: HashMap<String, std::path::PathBuf>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FacetReport {
+    pub node: String,
+    pub facet: String,
+    pub texture: String,
+    pub faces: usize,
+    pub ring_faces: usize,
+    pub band_faces: usize,
+    pub charts: usize,
+    pub seam_edges: usize,
+    pub seam_length: f64,
+    pub flattening: Vec<Method>,
+    pub metrics: UvMetrics,
+    pub unwrap_s: f64,
+}
+
+/// A scene's nodes baked, with the textures they use.
+pub struct BakedScene {
+    pub nodes: Vec<BakedNode>,
+    pub tissues: Tissues,
+    pub spec: SceneSpec,
+}
+
+/// Build every node of `spec` (database outputs it needs are built first
+/// if missing); `for_atlases`: with charts that do not overlap, so each
+/// facet can be baked into an atlas.
+pub fn build_scene(
+    spec: &SceneSpec,
+    for_atlases: bool,
+    progress: &dyn Progress,
+) -> Result<BakedScene> {
+    let database = Database::open(&spec.database)?;
+    let ids: Vec<String> = database.tissues.iter().map(|t| t.id.clone()).collect();
+    check_tissues(spec, &ids)?;
+    let tissues = ensure_tissues(spec, &database, progress)?;
+    let mut nodes = Vec::new();
+    for node in &spec.nodes {
+        check(progress)?;
+        nodes.push(build_node(spec, node, &tissues, for_atlases, progress)?);
+    }
+    Ok(BakedScene {
+        nodes,
+        tissues,
+        spec: spec.clone(),
+    })
+}
+
+/// Build the database entries the scene uses whose outputs are missing.
+fn ensure_tissues(
+    spec: &SceneSpec,
+    database: &Database,
+    progress: &dyn Progress,
+) -> Result<Tissues> {
+    let mut needed: Vec<(String, Output)> = Vec::new();
+    for node in &spec.nodes {
+        for f in &node.facets {
+            needed.push((f.texture.clone(), Output::Colour));
+            if f.bump > 0.0 {
+                needed.push((f.texture.clone(), Output::Height));
+            }
+            if let Some(o) = &f.overlay {
+                needed.push((o.clone(), Output::Overlay));
+            }
+        }
+    }
+    let mut tissues = Tissues::default();
+    for (id, output) in needed {
+        let t = database.tissue(&id)?;
+        if !t.outputs.contains(&output) {
+            return Err(Error::invalid(format!(
+                "{}: tissue '{id}' has no {output:?} output; add it to its `outputs`",
+                database.root.join("index.toml").display()
+            )));
+        }
+        let path = database.output_path(&id, output);
+        if !path.is_file() {
+            db::build(database, std::slice::from_ref(&id), &CancelOnly(progress))?;
+        }
+        let map = match output {
+            Output::Colour => &mut tissues.colour,
+            Output::Height => &mut tissues.height,
+            Output::Overlay => &mut tissues.overlay,
+        };
+        map.insert(id, path);
+    }
+    Ok(tissues)
+}
+
+/// The node's mesh: read or generated, repaired if needed, with facets.
+pub fn node_mesh(node: &NodeSpec) -> Result<TriMesh> {
+    let mut mesh = match &node.mesh {
+        MeshSpec::File(path) => io::read(path)?,
+        MeshSpec::UterineCavity(params) => uterus::generate(params).map_err(|e| {
+            node.origin.error(format!(
+                "node '{}': mesh.uterine_cavity.{}: {}",
+                node.name, e.key, e.msg
+            ))
+        })?,
+    };
+    if Topology::build(&mesh).is_err() {
+        mesh = make_manifold(&mesh).0;
+    }
+    if mesh.facets.is_none() {
+        mesh.facets = Some(Facets {
+            names: vec!["surface".into()],
+            of_face: vec![0; mesh.num_faces()],
+        });
+    }
+    Ok(mesh)
+}
+
+/// Each of the mesh's facets' settings: the entry named after it, else the
+/// entry named "*".
+fn match_facets(node: &NodeSpec, mesh: &TriMesh) -> Result<Vec<FacetSettings>> {
+    let names = &mesh.facets.as_ref().expect("set by node_mesh").names;
+    for f in &node.facets {
+        if f.name != "*" && !names.contains(&f.name) {
+            return Err(f.origin.error(format!(
+                "node '{}': facet '{}' is not a facet of the mesh (it has: {})",
+                node.name,
+                f.name,
+                names.join(", ")
+            )));
+        }
+    }
+    names
+        .iter()
+        .map(|name| {
+            node.facets
+                .iter()
+                .find(|f| &f.name == name)
+                .or_else(|| node.facets.iter().find(|f| f.name == "*"))
+                .cloned()
+                .ok_or_else(|| {
+                    node.origin.error(format!(
+                        "node '{}': the mesh's facet '{name}' has no [[node.facet]] settings (add one named \"{name}\" or \"*\")",
+                        node.name
+                    ))
+                })
+        })
+        .collect()
+}
+
+fn build_node(
+    spec: &SceneSpec,
+    node: &NodeSpec,
+    tissues: &Tissues,
+    for_atlases: bool,
+    progress: &dyn Progress,
+) -> Result<BakedNode> {
+    let mesh = node_mesh(node)?;
+    let settings = match_facets(node, &mesh)?;
+    let topology = Topology::build(&mesh)?;
+    let viewpoints = if spec.cameras.is_empty() {
+        Viewpoints::Orbit {
+            views: spec.bake.views,
+        }
+    } else {
+        Viewpoints::Cameras(
+            spec.cameras
+                .iter()
+                .map(|c| DVec3::from_array(c.position))
+                .collect(),
+        )
+    };
+    let seen = visibility::compute(&mesh, &topology, &viewpoints, progress);
+    let overlaps: Vec<f64> = settings.iter().map(|s| s.overlap).collect();
+    let pieces = facet_pieces(&mesh, &topology, &overlaps);
+    progress.stage("facets", pieces.len() as u64);
+    let quiet = CancelOnly(progress);
+    let edge_index: HashMap<[u32; 2], EdgeId> = (0..topology.num_edges())
+        .map(|e| {
+            let [a, b] = topology.edge_vertices(EdgeId::from(e));
+            ([a.0.min(b.0), a.0.max(b.0)], EdgeId::from(e))
+        })
+        .collect();
+    let names = mesh.facets.as_ref().expect("facets").names.clone();
+    let facets: Vec<BakedFacet> = pieces
+        .into_par_iter()
+        .map(|piece| {
+            let start = Instant::now();
+            let facet_settings = settings[piece.facet as usize].clone();
+            let piece_topo = Topology::build(&piece.mesh)?;
+            let piece_seen = Visibility {
+                vertex: piece
+                    .vertex_origin
+                    .iter()
+                    .map(|&v| seen.vertex[v as usize])
+                    .collect(),
+                edge: (0..piece_topo.num_edges())
+                    .map(|e| {
+                        let [a, b] = piece_topo
+                            .edge_vertices(EdgeId::from(e))
+                            .map(|v| piece.vertex_origin[v.idx()]);
+                        seen.edge[edge_index[&[a.min(b), a.max(b)]].idx()]
+                    })
+                    .collect(),
+                views: seen.views,
+            };
+            let opts = UnwrapOptions {
+                split_overlaps: for_atlases,
+                ..UnwrapOptions::default()
+            };
+            let unwrapped = unwrap_seen(&piece.mesh, piece_topo, piece_seen, &opts, &quiet)?;
+            let mut piece = piece;
+            piece.mesh = unwrapped.mesh;
+            let band = seam_bands(&piece.mesh, &unwrapped.topology, spec.bake.seam_band);
+            let m = unwrapped.report.metrics.clone();
+            progress.advance(1);
+            Ok(BakedFacet {
+                report: FacetReport {
+                    node: node.name.clone(),
+                    facet: names[piece.facet as usize].clone(),
+                    texture: facet_settings.texture.clone(),
+                    faces: piece.own,
+                    ring_faces: piece.mesh.num_faces() - piece.own,
+                    band_faces: band.len(),
+                    charts: m.charts,
+                    seam_edges: unwrapped.seams.len(),
+                    seam_length: m.seam_length,
+                    flattening: unwrapped
+                        .report
+                        .pieces
+                        .iter()
+                        .flat_map(|p| p.flattening.clone())
+                        .collect(),
+                    metrics: m,
+                    unwrap_s: start.elapsed().as_secs_f64(),
+                },
+                settings: facet_settings,
+                piece,
+                band,
+            })
+        })
+        .collect::<Result<_>>()?;
+    let normals = vertex_normals(&mesh);
+    let (compositor, unblended) = compositors(&mesh, &facets, tissues)?;
+    Ok(BakedNode {
+        name: node.name.clone(),
+        mesh,
+        topology,
+        normals,
+        facets,
+        compositor,
+        unblended,
+    })
+}
+
+pub fn vertex_normals(mesh: &TriMesh) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; mesh.num_vertices()];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let a = mesh.face_area_vector(f);
+        for &v in t {
+            n[v as usize] += a;
+        }
+    }
+    n.into_iter().map(DVec3::normalize_or_zero).collect()
+}
+
+/// A facet's texture transform (KHR_texture_transform): one copy of the
+/// texture per `tile_size` mesh units, rotated and shifted.
+pub fn colour_transform(s: &FacetSettings) -> Transform {
+    Transform {
+        scale: [1.0 / s.tile_size; 2],
+        rotation: s.rotation.to_radians(),
+        offset: s.offset,
+    }
+}
+
+pub fn overlay_transform(s: &FacetSettings) -> Transform {
+    Transform {
+        scale: [1.0 / s.overlay_tile_size; 2],
+        rotation: s.rotation.to_radians(),
+        offset: s.offset,
+    }
+}
+
+/// Corner `i` of piece face `f` is corner `order[i]` of its node face.
+fn corner_order(piece: &FacetPiece, node_mesh: &TriMesh, f: usize) -> [usize; 3] {
+    let node_face = node_mesh.triangles[piece.face_origin[f] as usize];
+    piece.mesh.triangles[f].map(|v| {
+        let origin = piece.vertex_origin[v as usize];
+        node_face
+            .iter()
+            .position(|&n| n == origin)
+            .expect("a piece face is its node face")
+    })
+}
+
+/// Reorder per-corner values of a piece face into its node face's order.
+fn to_node_order<T: Copy + Default>(values: [T; 3], order: [usize; 3]) -> [T; 3] {
+    let mut out = [T::default(); 3];
+    for i in 0..3 {
+        out[order[i]] = values[i];
+    }
+    out
+}
+
+/// The layers of every face of the node, bottom first: the own facet's
+/// look (with its seam band), then the rings of later facets (with theirs)
+/// in scene order: a later facet blends over everything of the earlier
+/// ones. And the same with only the own look (no band, no ring), for
+/// comparison.
+fn compositors(
+    mesh: &TriMesh,
+    facets: &[BakedFacet],
+    tissues: &Tissues,
+) -> Result<(Compositor, Compositor)> {
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut index: HashMap<std::path::PathBuf, usize> = HashMap::new();
+    let mut texture = |path: &Path| -> Result<usize> {
+        if let Some(&i) = index.get(path) {
+            return Ok(i);
+        }
+        textures.push(Texture::load(path)?);
+        index.insert(path.to_path_buf(), textures.len() - 1);
+        Ok(textures.len() - 1)
+    };
+    let n = mesh.num_faces();
+    let mut looks = Vec::with_capacity(facets.len());
+    let mut base: Vec<Option<Layer>> = vec![None; n];
+    let mut stack: Vec<Vec<(u32, Layer)>> = vec![Vec::new(); n];
+    for (look, bf) in facets.iter().enumerate() {
+        let s = &bf.settings;
+        looks.push(Look {
+            colour: texture(&tissues.colour[&s.texture])?,
+            transform: colour_transform(s),
+            overlay: match &s.overlay {
+                Some(o) => Some(Overlay {
+                    texture: texture(&tissues.overlay[o])?,
+                    transform: overlay_transform(s),
+                    opacity: s.overlay_opacity as f32,
+                }),
+                None => None,
+            },
+        });
+        let uvs = bf.piece.mesh.uvs.as_ref().expect("unwrapped");
+        let mut band: Vec<Option<&BandFace>> = vec![None; bf.piece.mesh.num_faces()];
+        for b in &bf.band {
+            band[b.face as usize] = Some(b);
+        }
+        for (f, band) in band.iter().enumerate() {
+            let order = corner_order(&bf.piece, mesh, f);
+            let layer = Layer {
+                look,
+                uv: to_node_order(uvs.triangles[f].map(|c| uvs.coords[c as usize]), order),
+                alpha: to_node_order(
+                    bf.piece.mesh.triangles[f].map(|v| bf.piece.alpha[v as usize]),
+                    order,
+                ),
+                band: band.map(|b| Band {
+                    uv: to_node_order(b.uv, order),
+                    alpha: to_node_order(b.alpha, order),
+                }),
+            };
+            let node_face = bf.piece.face_origin[f] as usize;
+            if f < bf.piece.own {
+                base[node_face] = Some(layer);
+            } else {
+                stack[node_face].push((bf.piece.facet, layer));
+            }
+        }
+    }
+    let mut blended = Vec::with_capacity(n);
+    let mut plain = Vec::with_capacity(n);
+    for f in 0..n {
+        let own = base[f].clone().expect("every face belongs to a facet");
+        stack[f].sort_by_key(|(facet, _)| *facet);
+        blended.push(
+            std::iter::once(own.clone())
+                .chain(stack[f].drain(..).map(|(_, l)| l))
+                .collect(),
+        );
+        plain.push(vec![Layer { band: None, ..own }]);
+    }
+    Ok((
+        Compositor {
+            textures: textures.clone(),
+            looks: looks.clone(),
+            layers: blended,
+        },
+        Compositor {
+            textures,
+            looks,
+            layers: plain,
+        },
+    ))
+}

@@ -1,0 +1,239 @@
+//! The colour a baked scene shows at any point of any face: the facet's
+//! look (tiled tissue texture, overlay over it, mixed with its continuation
+//! from across a seam in the seam bands), then the rings of later facets
+//! blended over it, each sampled through its texture transform exactly as a
+//! glTF viewer does (KHR_texture_transform), blended in linear light.
+//! Atlas baking, the preview and the seam contrast figures all read
+//! colours from here, so they agree with each other and with the .glb.
+
+use glam::DVec2;
+
+use crate::error::{Error, Result};
+
+/// A texture's transform, as KHR_texture_transform applies it:
+/// `offset + R(rotation) (scale * uv)`, R = [[cos, sin], [-sin, cos]].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub scale: [f64; 2],
+    /// Radians.
+    pub rotation: f64,
+    pub offset: [f64; 2],
+}
+
+impl Transform {
+    pub const IDENTITY: Transform = Transform {
+        scale: [1.0, 1.0],
+        rotation: 0.0,
+        offset: [0.0, 0.0],
+    };
+
+    pub fn apply(&self, uv: DVec2) -> DVec2 {
+        let (s, c) = self.rotation.sin_cos();
+        let (x, y) = (uv.x * self.scale[0], uv.y * self.scale[1]);
+        DVec2::new(
+            self.offset[0] + c * x + s * y,
+            self.offset[1] - s * x + c * y,
+        )
+    }
+}
+
+/// How a texture repeats past its edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    /// Every other copy mirrored: continuous even for an image that does
+    /// not tile (a vessel overlay).
+    Mirrored,
+}
+
+/// An RGBA image in linear light, ready to sample.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<[f32; 4]>,
+}
+
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+impl Texture {
+    /// Read a PNG colour (sRGB) texture.
+    pub fn load(path: &std::path::Path) -> Result<Texture> {
+        let img = crate::synth::exemplar::read_image(path)?.to_rgba8();
+        Ok(Texture {
+            width: img.width() as usize,
+            height: img.height() as usize,
+            texels: img
+                .pixels()
+                .map(|p| {
+                    [
+                        srgb_to_linear(p[0] as f32 / 255.0),
+                        srgb_to_linear(p[1] as f32 / 255.0),
+                        srgb_to_linear(p[2] as f32 / 255.0),
+                        p[3] as f32 / 255.0,
+                    ]
+                })
+                .collect(),
+        })
+        .and_then(|t: Texture| {
+            if t.texels.is_empty() {
+                Err(Error::format(path, "the texture has no pixels"))
+            } else {
+                Ok(t)
+            }
+        })
+    }
+
+    /// Bilinear sample at texture coordinates `t` (0..1 across the image,
+    /// v downwards as in glTF).
+    pub fn sample(&self, t: DVec2, wrap: Wrap) -> [f32; 4] {
+        let x = t.x * self.width as f64 - 0.5;
+        let y = t.y * self.height as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (i, j) = (x0 as i64, y0 as i64);
+        let at = |i: i64, j: i64| match wrap {
+            Wrap::Repeat => {
+                self.texels[j.rem_euclid(self.height as i64) as usize * self.width
+                    + i.rem_euclid(self.width as i64) as usize]
+            }
+            Wrap::Mirrored => self.mirror(i, j),
+        };
+        let corners = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
+        let mut out = [0.0; 4];
+        for c in 0..4 {
+            let top = corners[0][c] * (1.0 - fx) + corners[1][c] * fx;
+            let bottom = corners[2][c] * (1.0 - fx) + corners[3][c] * fx;
+            out[c] = top * (1.0 - fy) + bottom * fy;
+        }
+        out
+    }
+
+    fn mirror(&self, i: i64, j: i64) -> [f32; 4] {
+        let m = |k: i64, n: usize| {
+            let period = 2 * n as i64;
+            let k = k.rem_euclid(period);
+            (if k < n as i64 { k } else { period - 1 - k }) as usize
+        };
+        self.texels[m(j, self.height) * self.width + m(i, self.width)]
+    }
+}
+
+/// A vessel overlay over a tissue: an RGBA texture (mirrored, since it
+/// need not tile) whose alpha, times `opacity`, says where it shows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Overlay {
+    pub texture: usize,
+    pub transform: Transform,
+    pub opacity: f32,
+}
+
+/// What a facet looks like: its tissue texture, tiled, with its overlay
+/// over it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Look {
+    pub colour: usize,
+    pub transform: Transform,
+    pub overlay: Option<Overlay>,
+}
+
+impl Look {
+    /// Linear RGB at chart coordinates `uv`.
+    pub fn colour(&self, textures: &[Texture], uv: DVec2) -> [f32; 3] {
+        let t = textures[self.colour].sample(self.transform.apply(uv), Wrap::Repeat);
+        let mut c = [t[0], t[1], t[2]];
+        if let Some(o) = &self.overlay {
+            let v = textures[o.texture].sample(o.transform.apply(uv), Wrap::Mirrored);
+            let a = (v[3] * o.opacity).clamp(0.0, 1.0);
+            for i in 0..3 {
+                c[i] = c[i] * (1.0 - a) + v[i] * a;
+            }
+        }
+        c
+    }
+}
+
+/// One layer over a face: a look through per-corner chart coordinates,
+/// with per-corner alpha, and where the face lies in a seam band the look
+/// continued from across the seam mixed in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layer {
+    pub look: usize,
+    pub uv: [DVec2; 3],
+    pub alpha: [f32; 3],
+    pub band: Option<Band>,
+}
+
+/// A face's seam band (`blend::seam`): chart coordinates continued from
+/// across the nearest seam, and how much of that to mix in (1/2 on the
+/// seam, 0 at the band's edge).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Band {
+    pub uv: [DVec2; 3],
+    pub alpha: [f32; 3],
+}
+
+fn interpolate<T: Copy + Into<f64>>(v: [T; 3], w: [f64; 3]) -> f64 {
+    v[0].into() * w[0] + v[1].into() * w[1] + v[2].into() * w[2]
+}
+
+impl Layer {
+    /// Linear RGB and alpha at barycentric `w`.
+    pub fn colour(&self, looks: &[Look], textures: &[Texture], w: [f64; 3]) -> ([f32; 3], f32) {
+        let at = |uv: [DVec2; 3]| uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2];
+        let look = &looks[self.look];
+        let mut c = look.colour(textures, at(self.uv));
+        if let Some(band) = &self.band {
+            let t = interpolate(band.alpha, w).clamp(0.0, 1.0) as f32;
+            if t > 0.0 {
+                let d = look.colour(textures, at(band.uv));
+                for i in 0..3 {
+                    c[i] = c[i] * (1.0 - t) + d[i] * t;
+                }
+            }
+        }
+        (c, interpolate(self.alpha, w).clamp(0.0, 1.0) as f32)
+    }
+}
+
+/// Every face's layers, bottom first (the first is the facet's own,
+/// opaque).
+#[derive(Clone, Debug, Default)]
+pub struct Compositor {
+    pub textures: Vec<Texture>,
+    pub looks: Vec<Look>,
+    pub layers: Vec<Vec<Layer>>,
+}
+
+impl Compositor {
+    /// Linear RGB of `face` at barycentric `w`, layers blended "over". A
+    /// layer's whole look (tissue and overlay, and its seam band's mix) goes
+    /// in at its alpha, so at a seam both sides show exactly the same
+    /// half-and-half mix, under a later facet's ring as on its own faces.
+    pub fn colour(&self, face: usize, w: [f64; 3]) -> [f32; 3] {
+        let mut out = [0.0f32; 3];
+        for (k, layer) in self.layers[face].iter().enumerate() {
+            let (c, alpha) = layer.colour(&self.looks, &self.textures, w);
+            let a = if k == 0 { 1.0 } else { alpha };
+            for i in 0..3 {
+                out[i] = out[i] * (1.0 - a) + c[i] * a;
+            }
+        }
+        out
+    }
+}

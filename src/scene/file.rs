@@ -1,0 +1,446 @@
+//! Scene files (TOML), documented with examples in scenes/README.md.
+//!
+//! A scene is cameras and nodes; a node is a mesh (a file, whose groups and
+//! materials are its facets, or a generated organ) and the settings of each
+//! facet: the database tissue, its texture transform (tile size, rotation,
+//! offset), bump, an overlay and its opacity, and the width of the overlap
+//! ring in which it blends into the facets before it. Scenes may include
+//! other scenes. Unknown keys and bad values are errors naming the key and
+//! its line.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use super::uterus::CavityParams;
+use crate::error::{Error, Result};
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    /// Other scene files whose cameras and nodes join this one's.
+    #[serde(default)]
+    include: Vec<Spanned<PathBuf>>,
+    /// The tissue database (default: the one next to the scenes folder).
+    database: Option<PathBuf>,
+    #[serde(default, rename = "camera")]
+    cameras: Vec<Camera>,
+    #[serde(default, rename = "node")]
+    nodes: Vec<Node>,
+    #[serde(default)]
+    bake: Option<BakeSettings>,
+}
+
+/// A viewpoint: the first is the preview's; all are the endoscope path from
+/// which seam visibility is counted (when the scene has any).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub fov: f64,
+}
+
+fn default_fov() -> f64 {
+    70.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Node {
+    name: String,
+    mesh: Spanned<MeshSource>,
+    #[serde(default, rename = "facet")]
+    facets: Vec<FacetEntry>,
+    #[serde(default)]
+    interior: Option<Interior>,
+}
+
+/// Exactly one of `file` or a generator.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshSource {
+    file: Option<Spanned<PathBuf>>,
+    uterine_cavity: Option<CavityParams>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FacetEntry {
+    name: Spanned<String>,
+    texture: Spanned<String>,
+    #[serde(default = "default_tile")]
+    tile_size: Spanned<f64>,
+    #[serde(default)]
+    rotation: f64,
+    #[serde(default)]
+    offset: [f64; 2],
+    #[serde(default = "zero")]
+    bump: Spanned<f64>,
+    overlay: Option<Spanned<String>>,
+    #[serde(default = "default_opacity")]
+    overlay_opacity: Spanned<f64>,
+    overlay_tile_size: Option<Spanned<f64>>,
+    #[serde(default = "zero")]
+    overlap: Spanned<f64>,
+}
+
+fn default_tile() -> Spanned<f64> {
+    Spanned::new(0..0, 10.0)
+}
+fn zero() -> Spanned<f64> {
+    Spanned::new(0..0, 0.0)
+}
+fn default_opacity() -> Spanned<f64> {
+    Spanned::new(0..0, 0.6)
+}
+
+/// The solid texture filling a node's inside, for cut surfaces (baked by
+/// the 3D synthesis stage).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Interior {
+    /// Database tissue whose exemplar the block is synthesised from.
+    pub texture: String,
+    /// Mesh units covered by one block.
+    #[serde(default = "default_block_size")]
+    pub block_size: f64,
+}
+
+fn default_block_size() -> f64 {
+    10.0
+}
+
+/// How the bake runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BakeSettings {
+    /// Rings of triangles on each side of a seam carrying its blend.
+    #[serde(default = "default_band")]
+    pub seam_band: usize,
+    /// Orthographic views for seam visibility when the scene has no cameras.
+    #[serde(default = "default_views")]
+    pub views: usize,
+}
+
+fn default_band() -> usize {
+    3
+}
+fn default_views() -> usize {
+    128
+}
+
+impl Default for BakeSettings {
+    fn default() -> Self {
+        BakeSettings {
+            seam_band: default_band(),
+            views: default_views(),
+        }
+    }
+}
+
+/// Where a node's mesh comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshSpec {
+    File(PathBuf),
+    UterineCavity(CavityParams),
+}
+
+/// A facet's settings, checked.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FacetSettings {
+    /// The facet's name in the mesh ("surface" for a mesh without facets;
+    /// "*" for every facet not named otherwise).
+    pub name: String,
+    pub texture: String,
+    /// Mesh units covered by one copy of the texture.
+    pub tile_size: f64,
+    /// Degrees, counter-clockwise.
+    pub rotation: f64,
+    /// In texture widths.
+    pub offset: [f64; 2],
+    /// Normal-map strength, 0 for none.
+    pub bump: f64,
+    pub overlay: Option<String>,
+    pub overlay_opacity: f64,
+    pub overlay_tile_size: f64,
+    /// Width of the ring, into the facets listed before this one, over which
+    /// this facet's texture fades from 1 to 0.
+    pub overlap: f64,
+    /// Where the facet's texture is named, for errors found later.
+    #[serde(skip)]
+    pub origin: Origin,
+}
+
+/// A place in a scene file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Origin {
+    pub file: PathBuf,
+    pub line: usize,
+}
+
+impl Origin {
+    pub fn error(&self, msg: impl Into<String>) -> Error {
+        Error::at_line(&self.file, self.line, msg)
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeSpec {
+    pub name: String,
+    pub mesh: MeshSpec,
+    pub facets: Vec<FacetSettings>,
+    pub interior: Option<Interior>,
+    /// Where the mesh is declared, for errors found when it is built.
+    pub origin: Origin,
+}
+
+/// A scene file with its includes, checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneSpec {
+    pub path: PathBuf,
+    pub name: String,
+    pub database: PathBuf,
+    pub cameras: Vec<Camera>,
+    pub nodes: Vec<NodeSpec>,
+    pub bake: BakeSettings,
+}
+
+/// Line of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// Read a scene and everything it includes.
+pub fn load(path: &Path) -> Result<SceneSpec> {
+    let mut stack = Vec::new();
+    let mut spec = load_into(path, &mut stack)?;
+    spec.path = path.to_path_buf();
+    if spec.nodes.is_empty() {
+        return Err(Error::format(path, "the scene has no [[node]]"));
+    }
+    Ok(spec)
+}
+
+fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file: SceneFile = toml::from_str(&text).map_err(|e| {
+        let line = e.span().map(|s| line_of(&text, s.start));
+        match line {
+            Some(line) => Error::at_line(path, line, e.message().to_string()),
+            None => Error::format(path, e.message().to_string()),
+        }
+    })?;
+    let at = |span: std::ops::Range<usize>, msg: String| {
+        Error::at_line(path, line_of(&text, span.start), msg)
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let canonical = path.canonicalize().map_err(|e| Error::io(path, e))?;
+    stack.push(canonical);
+
+    let mut spec = SceneSpec {
+        path: path.to_path_buf(),
+        name: file.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into()
+        }),
+        database: match &file.database {
+            Some(d) => dir.join(d),
+            None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database"),
+        },
+        cameras: file.cameras.clone(),
+        nodes: Vec::new(),
+        bake: file.bake.clone().unwrap_or_default(),
+    };
+    for c in &spec.cameras {
+        if !(1.0..=170.0).contains(&c.fov) || c.position == c.look_at {
+            return Err(Error::format(
+                path,
+                format!(
+                    "camera at {:?}: fov must be from 1 to 170 degrees and look_at differ from position",
+                    c.position
+                ),
+            ));
+        }
+    }
+    for inc in &file.include {
+        let target = dir.join(inc.get_ref());
+        let canonical = target
+            .canonicalize()
+            .map_err(|e| at(inc.span(), format!("include: {}: {e}", target.display())))?;
+        if stack.contains(&canonical) {
+            let chain: Vec<String> = stack
+                .iter()
+                .chain([&canonical])
+                .map(|p| p.display().to_string())
+                .collect();
+            return Err(at(
+                inc.span(),
+                format!(
+                    "include: the scene includes itself ({})",
+                    chain.join(" -> ")
+                ),
+            ));
+        }
+        let included = load_into(&target, stack)?;
+        spec.cameras.extend(included.cameras);
+        spec.nodes.extend(included.nodes);
+    }
+    for node in &file.nodes {
+        spec.nodes.push(node_spec(node, dir, path, &text)?);
+    }
+    let mut names = std::collections::HashSet::new();
+    for n in &spec.nodes {
+        if !names.insert(n.name.clone()) {
+            return Err(Error::format(
+                path,
+                format!("node '{}' is defined twice", n.name),
+            ));
+        }
+    }
+    stack.pop();
+    Ok(spec)
+}
+
+fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpec> {
+    let at = |span: std::ops::Range<usize>, key: &str, msg: String| {
+        Error::at_line(
+            path,
+            line_of(text, span.start),
+            format!("node '{}': {key}: {msg}", node.name),
+        )
+    };
+    let source = node.mesh.get_ref();
+    let mesh = match (&source.file, &source.uterine_cavity) {
+        (Some(file), None) => {
+            let full = dir.join(file.get_ref());
+            if !full.is_file() {
+                return Err(at(
+                    file.span(),
+                    "mesh.file",
+                    format!("{} not found", full.display()),
+                ));
+            }
+            MeshSpec::File(full)
+        }
+        (None, Some(params)) => MeshSpec::UterineCavity(params.clone()),
+        _ => {
+            return Err(at(
+                node.mesh.span(),
+                "mesh",
+                "give exactly one of `file` or `[node.mesh.uterine_cavity]`".into(),
+            ));
+        }
+    };
+    let mut facets = Vec::new();
+    for f in &node.facets {
+        let name = f.name.get_ref().clone();
+        let key = |k: &str| format!("facet '{name}' {k}");
+        let positive = |v: &Spanned<f64>, k: &str| -> Result<f64> {
+            let x = *v.get_ref();
+            if x.is_finite() && x > 0.0 {
+                Ok(x)
+            } else {
+                Err(at(
+                    v.span(),
+                    &key(k),
+                    format!("must be a positive number, not {x}"),
+                ))
+            }
+        };
+        let overlap = *f.overlap.get_ref();
+        if !(overlap.is_finite() && overlap >= 0.0) {
+            return Err(at(
+                f.overlap.span(),
+                &key("overlap"),
+                format!("must be 0 or more, not {overlap}"),
+            ));
+        }
+        let bump = *f.bump.get_ref();
+        if !(0.0..=10.0).contains(&bump) {
+            return Err(at(
+                f.bump.span(),
+                &key("bump"),
+                format!("must be from 0 to 10, not {bump}"),
+            ));
+        }
+        let opacity = *f.overlay_opacity.get_ref();
+        if !(0.0..=1.0).contains(&opacity) {
+            return Err(at(
+                f.overlay_opacity.span(),
+                &key("overlay_opacity"),
+                format!("must be from 0 to 1, not {opacity}"),
+            ));
+        }
+        let tile_size = positive(&f.tile_size, "tile_size")?;
+        facets.push(FacetSettings {
+            name: name.clone(),
+            texture: f.texture.get_ref().clone(),
+            tile_size,
+            rotation: f.rotation,
+            offset: f.offset,
+            bump,
+            overlay: f.overlay.as_ref().map(|o| o.get_ref().clone()),
+            overlay_opacity: opacity,
+            overlay_tile_size: match &f.overlay_tile_size {
+                Some(t) => positive(t, "overlay_tile_size")?,
+                None => 2.0 * tile_size,
+            },
+            overlap,
+            origin: Origin {
+                file: path.to_path_buf(),
+                line: line_of(text, f.texture.span().start),
+            },
+        });
+    }
+    Ok(NodeSpec {
+        name: node.name.clone(),
+        mesh,
+        facets,
+        interior: node.interior.clone(),
+        origin: Origin {
+            file: path.to_path_buf(),
+            line: line_of(text, node.mesh.span().start),
+        },
+    })
+}
+
+/// Check every texture and overlay id against the database's, naming the
+/// scene line that uses an unknown one.
+pub fn check_tissues(spec: &SceneSpec, ids: &[String]) -> Result<()> {
+    let known = |id: &str| ids.iter().any(|k| k == id);
+    for node in &spec.nodes {
+        for f in &node.facets {
+            for (key, id) in [
+                ("texture", Some(&f.texture)),
+                ("overlay", f.overlay.as_ref()),
+            ] {
+                if let Some(id) = id
+                    && !known(id)
+                {
+                    return Err(f.origin.error(format!(
+                        "node '{}': facet '{}' {key}: '{id}' is not in the tissue database (it has: {})",
+                        node.name,
+                        f.name,
+                        ids.join(", ")
+                    )));
+                }
+            }
+        }
+        if let Some(interior) = &node.interior
+            && !known(&interior.texture)
+        {
+            return Err(node.origin.error(format!(
+                "node '{}': interior texture: '{}' is not in the tissue database",
+                node.name, interior.texture
+            )));
+        }
+    }
+    Ok(())
+}

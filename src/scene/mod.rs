@@ -1,0 +1,12 @@
+//! Scenes: organ meshes split into facets, each with its tissue, baked into
+//! assets a simulator loads.
+
+pub mod atlas;
+pub mod bake;
+pub mod build;
+pub mod composite;
+pub mod contrast;
+pub mod file;
+pub mod gltf;
+pub mod preview;
+pub mod uterus;

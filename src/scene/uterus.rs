@@ -1,0 +1,858 @@
+//! The uterine cavity seen from inside, as a hysteroscope sees it (seed 004,
+//! section 4; Sierra et al.'s parametric organ models): a pear-shaped
+//! surface, wide at the fundus and narrowing to the cervical canal, which is
+//! left open; normals face the inside. Myomas grow as submucosal bulges and
+//! polyps as stalked protrusions, each its own facet. Seeded, so a scene is
+//! the same mesh every time.
+//!
+//! Built from an icosphere (even triangles everywhere, refined twice around
+//! polyps), mapped onto the pear; myomas displace the wall along its normal
+//! with a smooth, compact bump whose outline the seed makes irregular;
+//! polyps remap a disc of the wall onto a surface of revolution (a rounded
+//! head on a stalk, flaring into the wall), which never folds because its
+//! profile curve is simple. Parameters that would make the surface cross
+//! itself are refused.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::mesh::refine::refine;
+use crate::mesh::shapes::icosphere;
+use crate::mesh::submesh::smooth_region;
+use crate::mesh::{Facets, Topology, TriMesh};
+use crate::rng;
+
+fn default_length() -> f64 {
+    40.0
+}
+fn default_width() -> f64 {
+    32.0
+}
+fn default_depth() -> f64 {
+    16.0
+}
+fn default_cervix() -> f64 {
+    2.5
+}
+fn default_resolution() -> usize {
+    5
+}
+
+/// Parameters of the cavity (lengths in millimetres, or any unit).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CavityParams {
+    #[serde(default)]
+    pub seed: u64,
+    /// Cervix to fundus.
+    #[serde(default = "default_length")]
+    pub length: f64,
+    /// Widest, left to right.
+    #[serde(default = "default_width")]
+    pub width: f64,
+    /// Widest, front to back (the cavity is flattened).
+    #[serde(default = "default_depth")]
+    pub depth: f64,
+    /// Radius of the open cervical canal.
+    #[serde(default = "default_cervix")]
+    pub cervix_radius: f64,
+    /// Icosphere subdivisions (4: 5k faces, 5: 20k, 6: 80k).
+    #[serde(default = "default_resolution")]
+    pub resolution: usize,
+    #[serde(default, rename = "myoma")]
+    pub myomas: Vec<Myoma>,
+    #[serde(default, rename = "polyp")]
+    pub polyps: Vec<Polyp>,
+}
+
+/// Where on the wall: `around` the long axis (0..1 of a turn, 0 = left,
+/// 0.25 = front) and `up` from the cervix (0) to the fundus (1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Myoma {
+    pub name: Option<String>,
+    pub at: [f64; 2],
+    /// Radius of its base on the wall.
+    pub radius: f64,
+    /// How far it bulges into the cavity.
+    pub height: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Polyp {
+    pub name: Option<String>,
+    pub at: [f64; 2],
+    pub stalk_radius: f64,
+    pub stalk_length: f64,
+    pub head_radius: f64,
+}
+
+/// A cavity with two myomas and a fundal polyp (what `organtex generate
+/// uterus` writes; the default scene configures the same by hand).
+pub fn demo() -> CavityParams {
+    CavityParams {
+        seed: 7,
+        length: default_length(),
+        width: default_width(),
+        depth: default_depth(),
+        cervix_radius: default_cervix(),
+        resolution: default_resolution(),
+        myomas: vec![
+            Myoma {
+                name: None,
+                at: [0.22, 0.62],
+                radius: 7.0,
+                height: 4.5,
+            },
+            Myoma {
+                name: None,
+                at: [0.6, 0.45],
+                radius: 5.0,
+                height: 3.0,
+            },
+        ],
+        polyps: vec![Polyp {
+            name: None,
+            at: [0.9, 0.85],
+            stalk_radius: 0.8,
+            stalk_length: 3.0,
+            head_radius: 2.2,
+        }],
+    }
+}
+
+/// A problem with the parameters: the key path and what is wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamError {
+    pub key: String,
+    pub msg: String,
+}
+
+fn bad(key: impl Into<String>, msg: impl Into<String>) -> ParamError {
+    ParamError {
+        key: key.into(),
+        msg: msg.into(),
+    }
+}
+
+/// The pear: where unit-sphere point `q` goes (z from -1 at the cervix to 1
+/// at the fundus).
+fn pear(p: &CavityParams, q: DVec3) -> DVec3 {
+    let t = (q.z + 1.0) / 2.0;
+    let s = smoothstep(0.0, 0.8, t);
+    let f = 0.35 + 0.65 * s;
+    DVec3::new(
+        q.x * p.width / 2.0 * f,
+        q.y * p.depth / 2.0 * f,
+        t * p.length,
+    )
+}
+
+fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The unit-sphere point of wall position `at`.
+fn sphere_point(at: [f64; 2]) -> DVec3 {
+    let z = 2.0 * at[1] - 1.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = TAU * at[0];
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// A feature (myoma or polyp) placed on the wall.
+struct Site {
+    centre: DVec3,
+    /// Into the cavity.
+    normal: DVec3,
+    /// Footprint radius on the wall.
+    footprint: f64,
+    key: String,
+    name: String,
+}
+
+/// Generate the cavity.
+pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
+    check(p)?;
+    let mut sphere = icosphere(p.resolution);
+    let mut sites = Vec::new();
+    for (i, m) in p.myomas.iter().enumerate() {
+        let name = m.name.clone().unwrap_or_else(|| format!("myoma-{}", i + 1));
+        sites.push((format!("myoma[{i}]"), name, m.at, m.radius));
+    }
+    for (i, pl) in p.polyps.iter().enumerate() {
+        let name = pl
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("polyp-{}", i + 1));
+        sites.push((format!("polyp[{i}]"), name, pl.at, polyp_footprint(pl)));
+    }
+    let sites: Vec<Site> = sites
+        .into_iter()
+        .map(|(key, name, at, footprint)| {
+            let q = sphere_point(at);
+            Site {
+                centre: pear(p, q),
+                normal: -outward_normal(p, q),
+                footprint,
+                key,
+                name,
+            }
+        })
+        .collect();
+    // Features must not overlap.
+    for i in 0..sites.len() {
+        for j in 0..i {
+            let gap = (sites[i].centre - sites[j].centre).length();
+            if gap < sites[i].footprint + sites[j].footprint {
+                return Err(bad(
+                    sites[i].key.clone(),
+                    format!(
+                        "{} overlaps {} ({} apart, their footprints need {:.3})",
+                        sites[i].name,
+                        sites[j].name,
+                        fmt(gap),
+                        sites[i].footprint + sites[j].footprint
+                    ),
+                ));
+            }
+        }
+    }
+    let mut names: Vec<String> = vec!["wall".into()];
+    names.extend(sites.iter().map(|s| s.name.clone()));
+    if let Some(dup) = (1..names.len()).find(|&i| names[..i].contains(&names[i])) {
+        return Err(bad(
+            sites[dup - 1].key.clone() + ".name",
+            format!("the facet name '{}' is used twice", names[dup]),
+        ));
+    }
+
+    // Refine the wall around polyps once: each polyp grows from its hole's
+    // rim, so a finer rim makes a rounder polyp.
+    let polyp_sites = &sites[p.myomas.len()..];
+    for _ in 0..1 {
+        let marked: Vec<bool> = (0..sphere.num_faces())
+            .map(|f| {
+                let c = pear(p, sphere.corners(f).iter().sum::<DVec3>() / 3.0);
+                polyp_sites
+                    .iter()
+                    .any(|s| (c - s.centre).length() < 1.3 * s.footprint)
+            })
+            .collect();
+        if !marked.iter().any(|&m| m) {
+            break;
+        }
+        sphere = refine(&sphere, &marked, |a, b| ((a + b) / 2.0).normalize()).0;
+    }
+
+    // Onto the pear; remember each vertex's height fraction for the canal.
+    let heights: Vec<f64> = sphere.positions.iter().map(|q| (q.z + 1.0) / 2.0).collect();
+    let mut positions: Vec<DVec3> = sphere.positions.iter().map(|&q| pear(p, q)).collect();
+    let original = positions.clone();
+    let mut facet_of_vertex = vec![0u32; positions.len()];
+
+    // Myomas deform their footprint; a face is a myoma's when all its
+    // corners are.
+    for (k, site) in sites.iter().enumerate().take(p.myomas.len()) {
+        let span = cavity_span(&original, &sphere.triangles, site);
+        let m = &p.myomas[k];
+        if m.height > 0.6 * span {
+            return Err(bad(
+                format!("{}.height", site.key),
+                format!(
+                    "{} is larger than the cavity: height {} exceeds 60% of the {:.3} across it there",
+                    site.name,
+                    fmt(m.height),
+                    span
+                ),
+            ));
+        }
+        bulge(
+            &mut positions,
+            &original,
+            &mut facet_of_vertex,
+            (k + 1) as u32,
+            site,
+            m,
+            p.seed ^ k as u64,
+        );
+    }
+    let mut triangles = sphere.triangles.clone();
+    let mut of_face: Vec<u32> = triangles
+        .iter()
+        .map(|t| {
+            let f = facet_of_vertex[t[0] as usize];
+            if t.iter().all(|&v| facet_of_vertex[v as usize] == f) {
+                f
+            } else {
+                0
+            }
+        })
+        .collect();
+    // Smooth each myoma's border, so no face sticks out of it or into it.
+    let sphere_topo = Topology::build(&sphere).expect("an icosphere is manifold");
+    for k in 1..=p.myomas.len() as u32 {
+        let mut region: Vec<bool> = of_face.iter().map(|&f| f == k).collect();
+        smooth_region(
+            &sphere_topo,
+            &mut region,
+            |f| of_face[f] != 0 && of_face[f] != k,
+            16,
+        );
+        for (f, inside) in region.into_iter().enumerate() {
+            if inside {
+                of_face[f] = k;
+            } else if of_face[f] == k {
+                of_face[f] = 0;
+            }
+        }
+    }
+    let mut heights = heights;
+
+    // Polyps grow out of holes cut in the wall.
+    for (k, site) in sites.iter().enumerate().skip(p.myomas.len()) {
+        let pl = &p.polyps[k - p.myomas.len()];
+        let span = cavity_span(&original, &sphere.triangles, site);
+        let rise = pl.stalk_length + 2.0 * pl.head_radius;
+        if rise > 0.6 * span {
+            return Err(bad(
+                site.key.clone(),
+                format!(
+                    "{} is larger than the cavity: it rises {} into the {:.3} across it there",
+                    site.name,
+                    fmt(rise),
+                    span
+                ),
+            ));
+        }
+        grow_polyp(
+            &mut positions,
+            &mut triangles,
+            &mut of_face,
+            (k + 1) as u32,
+            site,
+            pl,
+        )
+        .map_err(|msg| bad(site.key.clone(), msg))?;
+        heights.resize(positions.len(), 1.0);
+    }
+
+    // Open the cervical canal: drop the faces below the height where the
+    // cavity is as narrow as the canal.
+    let t_open = opening_height(p);
+    let mut kept = Vec::new();
+    let mut kept_facets = Vec::new();
+    for (t, f) in triangles.iter().zip(&of_face) {
+        if t.iter().any(|&v| heights[v as usize] >= t_open) {
+            // Reversed: the normals face the inside.
+            kept.push([t[0], t[2], t[1]]);
+            kept_facets.push(*f);
+        }
+    }
+    let mut mesh = compact(positions, kept);
+    mesh.facets = Some(Facets {
+        names,
+        of_face: kept_facets,
+    });
+    debug_assert!(Topology::build(&mesh).is_ok());
+    Ok(mesh)
+}
+
+fn fmt(x: f64) -> String {
+    format!("{}", (x * 1000.0).round() / 1000.0)
+}
+
+fn check(p: &CavityParams) -> Result<(), ParamError> {
+    for (key, v) in [
+        ("length", p.length),
+        ("width", p.width),
+        ("depth", p.depth),
+        ("cervix_radius", p.cervix_radius),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(key, format!("must be a positive number, not {v}")));
+        }
+    }
+    if p.cervix_radius >= p.width.min(p.depth) / 4.0 {
+        return Err(bad(
+            "cervix_radius",
+            format!(
+                "{} must be less than a quarter of the cavity's width and depth ({})",
+                fmt(p.cervix_radius),
+                fmt(p.width.min(p.depth) / 4.0)
+            ),
+        ));
+    }
+    if !(3..=7).contains(&p.resolution) {
+        return Err(bad(
+            "resolution",
+            format!("must be from 3 to 7, not {}", p.resolution),
+        ));
+    }
+    let check_at = |key: String, at: [f64; 2]| -> Result<(), ParamError> {
+        if !(0.0..1.0).contains(&at[0]) || !(0.2..=0.95).contains(&at[1]) {
+            return Err(bad(
+                key + ".at",
+                format!(
+                    "[{}, {}] must have around in [0, 1) and up in [0.2, 0.95]",
+                    at[0], at[1]
+                ),
+            ));
+        }
+        Ok(())
+    };
+    let positive = |key: String, v: f64| -> Result<(), ParamError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(bad(key, format!("must be a positive number, not {v}")))
+        }
+    };
+    for (i, m) in p.myomas.iter().enumerate() {
+        check_at(format!("myoma[{i}]"), m.at)?;
+        positive(format!("myoma[{i}].radius"), m.radius)?;
+        positive(format!("myoma[{i}].height"), m.height)?;
+        if m.height > 1.5 * m.radius {
+            return Err(bad(
+                format!("myoma[{i}].height"),
+                format!(
+                    "{} is more than 1.5 times its radius {}: a submucosal bulge that steep would fold",
+                    fmt(m.height),
+                    fmt(m.radius)
+                ),
+            ));
+        }
+        if m.radius > 0.4 * p.width.min(p.length) {
+            return Err(bad(
+                format!("myoma[{i}].radius"),
+                format!(
+                    "{} is larger than the cavity (at most {})",
+                    fmt(m.radius),
+                    fmt(0.4 * p.width.min(p.length))
+                ),
+            ));
+        }
+    }
+    for (i, pl) in p.polyps.iter().enumerate() {
+        check_at(format!("polyp[{i}]"), pl.at)?;
+        positive(format!("polyp[{i}].stalk_radius"), pl.stalk_radius)?;
+        positive(format!("polyp[{i}].stalk_length"), pl.stalk_length)?;
+        positive(format!("polyp[{i}].head_radius"), pl.head_radius)?;
+        if pl.stalk_radius >= pl.head_radius {
+            return Err(bad(
+                format!("polyp[{i}].stalk_radius"),
+                format!(
+                    "{} must be less than the head radius {}",
+                    fmt(pl.stalk_radius),
+                    fmt(pl.head_radius)
+                ),
+            ));
+        }
+        if polyp_footprint(pl) > 0.3 * p.width.min(p.depth) {
+            return Err(bad(
+                format!("polyp[{i}]"),
+                format!(
+                    "its footprint {} is larger than the cavity allows ({})",
+                    fmt(polyp_footprint(pl)),
+                    fmt(0.3 * p.width.min(p.depth))
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Outward normal of the pear at unit-sphere point `q` (from the map's
+/// derivatives along two tangents).
+fn outward_normal(p: &CavityParams, q: DVec3) -> DVec3 {
+    let helper = if q.z.abs() < 0.9 { DVec3::Z } else { DVec3::X };
+    let t1 = q.cross(helper).normalize();
+    let t2 = q.cross(t1);
+    let h = 1e-5;
+    let d1 = pear(p, (q + t1 * h).normalize()) - pear(p, (q - t1 * h).normalize());
+    let d2 = pear(p, (q + t2 * h).normalize()) - pear(p, (q - t2 * h).normalize());
+    let n = d1.cross(d2).normalize();
+    // Outward: away from the long axis.
+    let c = pear(p, q);
+    if n.dot(c - DVec3::new(0.0, 0.0, c.z)) >= 0.0 {
+        n
+    } else {
+        -n
+    }
+}
+
+/// Distance from a site across the cavity to the opposite wall, along its
+/// inward normal.
+fn cavity_span(positions: &[DVec3], triangles: &[[u32; 3]], site: &Site) -> f64 {
+    // The site is on the smooth pear, the mesh only near it: ignore the wall
+    // under the site itself.
+    triangles
+        .iter()
+        .filter_map(|t| {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            ray_triangle(site.centre, site.normal, a, b, c)
+        })
+        .filter(|&d| d > 0.25 * site.footprint)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Möller-Trumbore: distance along the ray to the triangle, if it hits.
+fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-14 {
+        return None;
+    }
+    let s = o - a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| e2.dot(q) / det)
+}
+
+/// A myoma: the wall pushed along the site's inward normal by a smooth
+/// compact bump, its outline made irregular by a few seeded harmonics.
+fn bulge(
+    positions: &mut [DVec3],
+    original: &[DVec3],
+    facet_of_vertex: &mut [u32],
+    facet: u32,
+    site: &Site,
+    m: &Myoma,
+    seed: u64,
+) {
+    let (e1, e2) = tangent_frame(site.normal);
+    let harmonic: Vec<(f64, f64)> = (2..5)
+        .map(|k| {
+            let amp = 0.08 * (rng::hash(seed, &[k]) % 1000) as f64 / 1000.0;
+            let phase = TAU * (rng::hash(seed, &[k, 1]) % 1000) as f64 / 1000.0;
+            (amp, phase)
+        })
+        .collect();
+    for (v, &q) in original.iter().enumerate() {
+        let d = q - site.centre;
+        let along = d.dot(site.normal);
+        let flat = d - site.normal * along;
+        let phi = flat.dot(e2).atan2(flat.dot(e1));
+        let wobble: f64 = harmonic
+            .iter()
+            .enumerate()
+            .map(|(k, (a, ph))| a * ((k as f64 + 2.0) * phi + ph).sin())
+            .sum();
+        let s = d.length() / (m.radius * (1.0 + wobble));
+        if s < 1.0 {
+            let b = (1.0 - s * s).powi(2);
+            positions[v] += site.normal * m.height * b;
+            if s < 0.92 {
+                facet_of_vertex[v] = facet;
+            }
+        }
+    }
+}
+
+/// Footprint radius of a polyp on the wall.
+fn polyp_footprint(pl: &Polyp) -> f64 {
+    pl.head_radius + 2.0 * pl.stalk_radius
+}
+
+/// A polyp: the wall's faces within its footprint are removed, and the
+/// polyp is built as rings of vertices over its profile (a surface of
+/// revolution), the first ring being the hole's own rim, so it is stitched
+/// to the wall exactly. Rings are spaced by their own vertex spacing, which
+/// keeps the triangles close to equilateral from the flare to the head's
+/// top, closed by a pole. Faces up to the stalk's foot are the polyp's
+/// facet; the flare stays wall.
+fn grow_polyp(
+    positions: &mut Vec<DVec3>,
+    triangles: &mut Vec<[u32; 3]>,
+    of_face: &mut Vec<u32>,
+    facet: u32,
+    site: &Site,
+    pl: &Polyp,
+) -> Result<(), String> {
+    let (e1, e2) = tangent_frame(site.normal);
+    let inside = |p: DVec3| {
+        let d = p - site.centre;
+        let flat = d - site.normal * d.dot(site.normal);
+        flat.length() < site.footprint && d.dot(site.normal).abs() < site.footprint
+    };
+    let keep: Vec<bool> = triangles
+        .iter()
+        .map(|t| !inside(t.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / 3.0))
+        .collect();
+    let mut k = 0;
+    triangles.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    let mut k = 0;
+    of_face.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+    // The hole's rim, in the order the wall runs it.
+    let rim = hole_rim(positions, triangles, site)?;
+    let n = rim.len();
+    let angle = |p: DVec3| {
+        let d = p - site.centre;
+        d.dot(e2).atan2(d.dot(e1))
+    };
+    let mut phi: Vec<f64> = rim.iter().map(|&v| angle(positions[v as usize])).collect();
+    for j in 1..n {
+        while phi[j] - phi[j - 1] > PI {
+            phi[j] -= TAU;
+        }
+        while phi[j] - phi[j - 1] < -PI {
+            phi[j] += TAU;
+        }
+    }
+    // Angles increasing in the rim's own direction.
+    let turn = if phi[n - 1] >= phi[0] { 1.0 } else { -1.0 };
+    let start = phi[0];
+    let rim_angles: Vec<f64> = phi.iter().map(|a| (a - start) * turn).collect();
+    // Triangles the size of the wall's around the rim.
+    let size = (0..n)
+        .map(|j| (positions[rim[j] as usize] - positions[rim[(j + 1) % n] as usize]).length())
+        .sum::<f64>()
+        / n as f64;
+
+    let profile = polyp_profile(pl, site.footprint);
+    let total = profile.arc[profile.arc.len() - 1];
+    let foot = profile.arc_at_stalk_foot;
+    let step = size * 0.87;
+    let rings = ((total / step).round() as usize).max(3);
+    // The rim is where the curved, faceted wall really is: its distance
+    // from the axis and its height off the tangent plane at each angle. The
+    // flare eases from the rim into the profile by the stalk's foot, so the
+    // wall runs into the polyp with no crease.
+    let rim_offset: Vec<(f64, f64)> = rim
+        .iter()
+        .map(|&v| {
+            let d = positions[v as usize] - site.centre;
+            let h = d.dot(site.normal);
+            ((d - site.normal * h).length() - site.footprint, h)
+        })
+        .collect();
+    let rim_at = |a: f64| {
+        // Rim angles increase from 0 to under a turn; wrap between the last
+        // and the first.
+        let j = rim_angles.partition_point(|&x| x <= a).max(1) - 1;
+        let (a0, a1) = (
+            rim_angles[j],
+            if j + 1 < n { rim_angles[j + 1] } else { TAU },
+        );
+        let t = if a1 > a0 {
+            ((a - a0) / (a1 - a0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (p, q) = (rim_offset[j], rim_offset[(j + 1) % n]);
+        (p.0 + (q.0 - p.0) * t, p.1 + (q.1 - p.1) * t)
+    };
+    let mut previous: (Vec<u32>, Vec<f64>) = (rim.clone(), rim_angles.clone());
+    for k in 1..rings {
+        let along = total * (1.0 - k as f64 / rings as f64);
+        let (r, h) = profile.point(along);
+        let ease = smoothstep(foot, total, along);
+        let count = ((TAU * r / size).round() as usize).clamp(6, n.max(6));
+        let angles: Vec<f64> = (0..count).map(|j| TAU * j as f64 / count as f64).collect();
+        let ids: Vec<u32> = angles
+            .iter()
+            .map(|&a| {
+                let (dr, dh) = rim_at(a);
+                let a = start + turn * a;
+                positions.push(
+                    site.centre
+                        + (e1 * a.cos() + e2 * a.sin()) * (r + dr * ease)
+                        + site.normal * (h + dh * ease),
+                );
+                (positions.len() - 1) as u32
+            })
+            .collect();
+        let owner = if along <= foot { facet } else { 0 };
+        let before = triangles.len();
+        zip_rings(&previous, (&ids, &angles), triangles);
+        of_face.extend(std::iter::repeat_n(owner, triangles.len() - before));
+        previous = (ids, angles);
+    }
+    let (_, top) = profile.point(0.0);
+    positions.push(site.centre + site.normal * top);
+    let pole = (positions.len() - 1) as u32;
+    let (last, _) = &previous;
+    for j in 0..last.len() {
+        triangles.push([last[(j + 1) % last.len()], last[j], pole]);
+        of_face.push(facet);
+    }
+    Ok(())
+}
+
+/// Triangulate the band between two rings, the outer one (`outer`, run in
+/// the wall's direction) and the next one in: walk both in angle order,
+/// each step advancing the ring whose next vertex comes first (a zipper),
+/// so rings of any vertex counts join without slivers.
+fn zip_rings(outer: &(Vec<u32>, Vec<f64>), inner: (&[u32], &[f64]), triangles: &mut Vec<[u32; 3]>) {
+    let (p, pa) = (&outer.0, &outer.1);
+    let (c, ca) = inner;
+    let (np, nc) = (p.len(), c.len());
+    let angle = |a: &[f64], k: usize, n: usize| a[k % n] + TAU * (k / n) as f64;
+    let (mut i, mut j) = (0, 0);
+    while i < np || j < nc {
+        let advance_outer = j == nc || (i < np && angle(pa, i + 1, np) <= angle(ca, j + 1, nc));
+        if advance_outer {
+            triangles.push([p[(i + 1) % np], p[i % np], c[j % nc]]);
+            i += 1;
+        } else {
+            triangles.push([p[i % np], c[j % nc], c[(j + 1) % nc]]);
+            j += 1;
+        }
+    }
+}
+
+/// The boundary loop left by removing a polyp's footprint: the loop nearest
+/// the site, as vertex ids in the order the wall's faces run it.
+fn hole_rim(positions: &[DVec3], triangles: &[[u32; 3]], site: &Site) -> Result<Vec<u32>, String> {
+    let mut next: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+    let mut directed = std::collections::HashSet::new();
+    for t in triangles {
+        for i in 0..3 {
+            directed.insert((t[i], t[(i + 1) % 3]));
+        }
+    }
+    for &(a, b) in &directed {
+        if !directed.contains(&(b, a)) {
+            let near = (positions[a as usize] - site.centre).length() < 2.0 * site.footprint;
+            if near && next.insert(a, b).is_some() {
+                return Err(
+                    "the wall around the polyp is pinched; move it or change its size".into(),
+                );
+            }
+        }
+    }
+    let start = *next
+        .keys()
+        .min()
+        .ok_or("the polyp's footprint removed no faces; make it larger")?;
+    let mut rim = vec![start];
+    let mut v = next[&start];
+    while v != start {
+        rim.push(v);
+        v = *next
+            .get(&v)
+            .ok_or("the hole under the polyp is not one loop")?;
+        if rim.len() > next.len() {
+            return Err("the hole under the polyp is not one loop".into());
+        }
+    }
+    if rim.len() != next.len() {
+        return Err("the polyp's footprint left more than one hole".into());
+    }
+    Ok(rim)
+}
+
+/// A polyline (r, h) by arc length.
+struct Profile {
+    points: Vec<(f64, f64)>,
+    arc: Vec<f64>,
+    /// Arc length from the head's top to where the stalk meets the flare.
+    arc_at_stalk_foot: f64,
+}
+
+impl Profile {
+    /// Point at arc length `target` from the head's top.
+    fn point(&self, target: f64) -> (f64, f64) {
+        let target = target.clamp(0.0, self.arc[self.arc.len() - 1]);
+        let i = self
+            .arc
+            .partition_point(|&a| a < target)
+            .clamp(1, self.arc.len() - 1);
+        let t = (target - self.arc[i - 1]) / (self.arc[i] - self.arc[i - 1]).max(1e-300);
+        let (a, b) = (self.points[i - 1], self.points[i]);
+        (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t)
+    }
+}
+
+/// Head top, round head down to where it meets the stalk, the stalk, then a
+/// quarter-round fillet out to the footprint's rim on the wall. A simple
+/// curve in the half-plane r >= 0, so the surface it sweeps is embedded.
+fn polyp_profile(pl: &Polyp, footprint: f64) -> Profile {
+    let (rh, rs) = (pl.head_radius, pl.stalk_radius);
+    let fillet = rs.min(0.5 * pl.stalk_length);
+    let neck = pl.stalk_length;
+    let centre = neck + (rh * rh - rs * rs).sqrt();
+    let end = -((rh * rh - rs * rs).sqrt() / rh).asin();
+    let mut points = Vec::new();
+    for k in 0..=60 {
+        let a = PI / 2.0 + (end - PI / 2.0) * k as f64 / 60.0;
+        points.push((rh * a.cos(), centre + rh * a.sin()));
+    }
+    points.push((rs, fillet));
+    let foot_index = points.len() - 1;
+    for k in 1..=20 {
+        let t = k as f64 / 20.0 * PI / 2.0;
+        points.push((
+            rs + (footprint - rs) * (1.0 - t.cos()),
+            fillet * (1.0 - t.sin()),
+        ));
+    }
+    let mut arc = vec![0.0];
+    for w in points.windows(2) {
+        let d = ((w[1].0 - w[0].0).powi(2) + (w[1].1 - w[0].1).powi(2)).sqrt();
+        arc.push(arc[arc.len() - 1] + d);
+    }
+    Profile {
+        arc_at_stalk_foot: arc[foot_index],
+        points,
+        arc,
+    }
+}
+
+fn tangent_frame(n: DVec3) -> (DVec3, DVec3) {
+    let helper = if n.z.abs() < 0.9 { DVec3::Z } else { DVec3::X };
+    let e1 = helper.cross(n).normalize();
+    (e1, n.cross(e1))
+}
+
+/// The height fraction below which the cavity is narrower than the canal.
+fn opening_height(p: &CavityParams) -> f64 {
+    let radius = |t: f64| {
+        let q = DVec3::new(
+            (1.0 - (2.0 * t - 1.0).powi(2)).max(0.0).sqrt(),
+            0.0,
+            2.0 * t - 1.0,
+        );
+        let a = pear(p, q).x;
+        let b = pear(p, DVec3::new(0.0, q.x, q.z)).y;
+        (a * b).sqrt()
+    };
+    let (mut lo, mut hi) = (0.0, 0.5);
+    for _ in 0..60 {
+        let mid = (lo + hi) / 2.0;
+        if radius(mid) < p.cervix_radius {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// Drop unreferenced vertices, renumbering the rest in order.
+fn compact(positions: Vec<DVec3>, mut triangles: Vec<[u32; 3]>) -> TriMesh {
+    let mut map = vec![u32::MAX; positions.len()];
+    let mut kept = Vec::new();
+    for t in &mut triangles {
+        for v in t.iter_mut() {
+            if map[*v as usize] == u32::MAX {
+                map[*v as usize] = kept.len() as u32;
+                kept.push(positions[*v as usize]);
+            }
+            *v = map[*v as usize];
+        }
+    }
+    TriMesh::new(kept, triangles)
+}

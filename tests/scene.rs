@@ -1,0 +1,550 @@
+//! Scenes and bakes: the generated cavity is a clean surface, bakes hide
+//! their seams and facet borders, a texture transform changes nothing but
+//! the transform, bakes are deterministic, and bad scenes are refused
+//! clearly with nothing written.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use organtex::mesh::{Components, Topology, TriMesh};
+use organtex::progress::{Progress, Silent};
+use organtex::scene::bake::{BakeOptions, BakeReport, bake};
+use organtex::scene::uterus::{self, CavityParams};
+use organtex::{Error, Result};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn default_scene() -> PathBuf {
+    root().join("scenes").join("hysteroscopy_myomas.toml")
+}
+
+/// Write a scene using the repo's database into `dir`.
+fn scene_file(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let path = dir.join(name);
+    let text = format!("database = {:?}\n{body}", root().join("database"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A small cavity with one myoma: quick to bake, one seam-cut wall and one
+/// facet border, at the shipped scenes' resolution.
+fn small_scene(rotation: f64, tile: f64, offset: [f64; 2]) -> String {
+    format!(
+        r#"
+[[camera]]
+position = [0.0, 0.0, 6.0]
+look_at = [0.0, 0.0, 40.0]
+
+[[node]]
+name = "uterus"
+[node.mesh.uterine_cavity]
+seed = 5
+resolution = 5
+[[node.mesh.uterine_cavity.myoma]]
+at = [0.3, 0.6]
+radius = 7.0
+height = 4.0
+
+[[node.facet]]
+name = "wall"
+texture = "fundus-tissue"
+tile_size = {tile}
+rotation = {rotation}
+offset = [{}, {}]
+bump = 1.0
+
+[[node.facet]]
+name = "myoma-1"
+texture = "ihc-glands"
+tile_size = 6.0
+overlap = 2.0
+"#,
+        offset[0], offset[1]
+    )
+}
+
+fn assert_hidden(report: &BakeReport, what: &str) {
+    let mut seams = 0;
+    for f in &report.facets {
+        if let (Some(b), Some(u)) = (f.seam_contrast, f.seam_contrast_unblended) {
+            seams += 1;
+            assert!(
+                b <= 1.2,
+                "{what}: {} seam contrast {b:.3} > 1.2",
+                f.facet.facet
+            );
+            assert!(
+                u > b,
+                "{what}: {} blending does not lower the seam contrast ({u:.3} -> {b:.3})",
+                f.facet.facet
+            );
+        }
+    }
+    assert!(seams > 0, "{what}: no facet has seams to measure");
+    for b in &report.borders {
+        let (blended, plain) = (
+            b.border_contrast.unwrap(),
+            b.border_contrast_unblended.unwrap(),
+        );
+        assert!(blended <= 1.2, "{what}: border contrast {blended:.3} > 1.2");
+        assert!(
+            plain > 2.0 * blended,
+            "{what}: borders {plain:.3} unblended vs {blended:.3}"
+        );
+    }
+}
+
+/// The JSON and binary chunks of a .glb.
+fn glb_chunks(path: &Path) -> (serde_json::Value, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[0..4], b"glTF");
+    assert_eq!(u32::from_le_bytes(bytes[4..8].try_into().unwrap()), 2);
+    assert_eq!(
+        u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+        bytes.len()
+    );
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[16..20], b"JSON");
+    let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin = 20 + json_len;
+    assert_eq!(&bytes[bin + 4..bin + 8], b"BIN\0");
+    (json, bytes[bin + 8..].to_vec())
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|d| {
+            d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+#[test]
+fn the_generated_cavity_is_a_clean_open_surface_facing_inside() {
+    let p = uterus::demo();
+    let mesh = uterus::generate(&p).unwrap();
+    let topo = Topology::build(&mesh).expect("manifold");
+    let parts = Components::find(&topo).topology(&topo);
+    assert_eq!(parts.len(), 1);
+    assert_eq!(parts[0].genus, 0);
+    assert_eq!(
+        parts[0].boundary_loops, 1,
+        "the cervical canal is the one opening"
+    );
+    let names = &mesh.facets.as_ref().unwrap().names;
+    assert_eq!(names, &["wall", "myoma-1", "myoma-2", "polyp-1"]);
+    for k in 0..names.len() as u32 {
+        assert!(
+            mesh.facets.as_ref().unwrap().of_face.contains(&k),
+            "facet {k} has faces"
+        );
+    }
+    // Normals face the inside: the enclosed volume counts negative (the
+    // cervical opening is small, so its missing cap hardly counts).
+    assert!(mesh.signed_volume() < -1000.0, "{}", mesh.signed_volume());
+    assert_eq!(self_intersections(&mesh), 0);
+    // Seeded: the same parameters give the same mesh, another seed another.
+    assert_eq!(uterus::generate(&p).unwrap().positions, mesh.positions);
+    let other = uterus::generate(&CavityParams { seed: 8, ..p }).unwrap();
+    assert_ne!(other.positions, mesh.positions);
+}
+
+/// Pairs of faces sharing no vertex that cross each other, found through a
+/// grid of cells a few triangles wide.
+fn self_intersections(mesh: &TriMesh) -> usize {
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let cell = 2.0 * (mesh.area() / mesh.num_faces() as f64).sqrt();
+    let key = |p: DVec3| ((p - lo) / cell).floor().as_ivec3();
+    let mut cells: std::collections::HashMap<glam::IVec3, Vec<usize>> = Default::default();
+    for f in 0..mesh.num_faces() {
+        let c = mesh.corners(f);
+        let (a, b) = (key(c[0].min(c[1]).min(c[2])), key(c[0].max(c[1]).max(c[2])));
+        for x in a.x..=b.x {
+            for y in a.y..=b.y {
+                for z in a.z..=b.z {
+                    cells.entry(glam::IVec3::new(x, y, z)).or_default().push(f);
+                }
+            }
+        }
+    }
+    let _ = hi;
+    let mut pairs = std::collections::HashSet::new();
+    for faces in cells.values() {
+        for (i, &f) in faces.iter().enumerate() {
+            for &g in &faces[i + 1..] {
+                let (tf, tg) = (mesh.triangles[f], mesh.triangles[g]);
+                if tf.iter().any(|v| tg.contains(v)) {
+                    continue;
+                }
+                if triangles_cross(mesh.corners(f), mesh.corners(g)) {
+                    pairs.insert((f.min(g), f.max(g)));
+                }
+            }
+        }
+    }
+    pairs.len()
+}
+
+/// Separating axis test for two triangles (face normals and the nine edge
+/// cross products); touching counts as apart.
+fn triangles_cross(a: [DVec3; 3], b: [DVec3; 3]) -> bool {
+    let edges = |t: [DVec3; 3]| [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+    let mut axes = vec![
+        (a[1] - a[0]).cross(a[2] - a[0]),
+        (b[1] - b[0]).cross(b[2] - b[0]),
+    ];
+    for ea in edges(a) {
+        for eb in edges(b) {
+            axes.push(ea.cross(eb));
+        }
+    }
+    let scale = (a[1] - a[0]).length().max((b[1] - b[0]).length());
+    for axis in axes {
+        let len = axis.length();
+        if len < 1e-12 * scale * scale {
+            continue;
+        }
+        let project = |t: [DVec3; 3]| {
+            let d = t.map(|p| p.dot(axis) / len);
+            (d[0].min(d[1]).min(d[2]), d[0].max(d[1]).max(d[2]))
+        };
+        let ((a0, a1), (b0, b1)) = (project(a), project(b));
+        let eps = 1e-9 * scale;
+        if a1 <= b0 + eps || b1 <= a0 + eps {
+            return false;
+        }
+    }
+    true
+}
+
+#[test]
+fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
+    let out = tempfile::tempdir().unwrap();
+    let baked = bake(
+        &default_scene(),
+        out.path(),
+        &BakeOptions::default(),
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(
+        files_in(out.path()),
+        ["preview.png", "report.json", "scene.glb"]
+    );
+    let r = &baked.report;
+    assert_eq!(r.mode, "layered");
+    let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();
+    assert_eq!(facets, ["wall", "myoma-front", "myoma-back", "polyp"]);
+    for f in &r.facets {
+        assert_eq!(f.facet.metrics.flips, 0, "{}", f.facet.facet);
+        assert!(f.facet.metrics.conf_mean < 1.1, "{}", f.facet.facet);
+    }
+    assert!(
+        r.facets.iter().skip(1).all(|f| f.facet.ring_faces > 0),
+        "later facets have rings"
+    );
+    assert!(
+        r.facets[0].facet.band_faces > 0,
+        "the wall's seams have bands"
+    );
+    assert_hidden(r, "default scene");
+
+    let (json, _) = glb_chunks(&baked.glb);
+    let nodes: Vec<&str> = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        nodes,
+        [
+            "uterus/wall",
+            "uterus/myoma-front",
+            "uterus/myoma-back",
+            "uterus/polyp"
+        ]
+    );
+    let materials = json["materials"].as_array().unwrap();
+    assert!(materials.iter().any(|m| m["alphaMode"] == "BLEND"));
+    assert!(
+        materials.iter().any(|m| m["normalTexture"].is_object()),
+        "bump gives a normal map"
+    );
+    for mesh in json["meshes"].as_array().unwrap() {
+        for p in mesh["primitives"].as_array().unwrap() {
+            let m = &materials[p["material"].as_u64().unwrap() as usize];
+            if m["alphaMode"] == "BLEND" {
+                assert!(
+                    p["attributes"]["COLOR_0"].is_number(),
+                    "blend layers carry vertex alpha"
+                );
+            }
+            if m["normalTexture"].is_object() {
+                assert!(
+                    p["attributes"]["TANGENT"].is_number(),
+                    "normal maps come with tangents"
+                );
+            }
+        }
+    }
+    let preview = image::open(&baked.preview).unwrap();
+    assert_eq!((preview.width(), preview.height()), (960, 720));
+}
+
+#[test]
+fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
+    let out = tempfile::tempdir().unwrap();
+    let opts = BakeOptions {
+        atlas: Some(2048),
+        ..BakeOptions::default()
+    };
+    let baked = bake(&default_scene(), out.path(), &opts, &Silent).unwrap();
+    for f in &baked.report.facets {
+        assert_eq!(
+            f.facet.metrics.overlaps, 0,
+            "{} overlaps in its atlas",
+            f.facet.facet
+        );
+        assert_eq!(f.facet.metrics.flips, 0);
+    }
+    assert_hidden(&baked.report, "atlas");
+    let (json, _) = glb_chunks(&baked.glb);
+    assert!(
+        json["materials"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|m| m["alphaMode"] != "BLEND")
+    );
+    assert_eq!(
+        json["images"].as_array().unwrap().len(),
+        4,
+        "one atlas per facet"
+    );
+}
+
+/// Everything of a .glb but the texture transforms.
+fn without_transforms(mut json: serde_json::Value) -> serde_json::Value {
+    for m in json["materials"].as_array_mut().unwrap() {
+        for slot in ["/pbrMetallicRoughness/baseColorTexture", "/normalTexture"] {
+            if let Some(info) = m.pointer_mut(slot) {
+                info["extensions"]["KHR_texture_transform"] = serde_json::Value::Null;
+            }
+        }
+    }
+    json
+}
+
+#[test]
+fn moving_turning_or_scaling_a_texture_changes_only_its_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    let transforms = [
+        (0.0, 10.0, [0.0, 0.0]),
+        (35.0, 10.0, [0.3, -0.2]),
+        (-60.0, 6.5, [0.7, 0.45]),
+    ];
+    let mut reference: Option<(serde_json::Value, Vec<u8>)> = None;
+    let mut wall_transforms = Vec::new();
+    for (k, (rotation, tile, offset)) in transforms.into_iter().enumerate() {
+        // Same file name, so the scene's name is the same too.
+        let folder = dir.path().join(format!("t{k}"));
+        std::fs::create_dir(&folder).unwrap();
+        let scene = scene_file(&folder, "scene.toml", &small_scene(rotation, tile, offset));
+        let out = dir.path().join(format!("layered{k}"));
+        let baked = bake(&scene, &out, &BakeOptions::default(), &Silent).unwrap();
+        assert_hidden(&baked.report, &format!("transform {k} layered"));
+        let (json, bin) = glb_chunks(&baked.glb);
+        wall_transforms.push(json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"].clone());
+        let stripped = without_transforms(json);
+        match &reference {
+            None => reference = Some((stripped, bin)),
+            Some((json0, bin0)) => {
+                assert!(
+                    bin == *bin0,
+                    "transform {k}: the binary chunk (geometry, uvs, images) changed"
+                );
+                assert!(
+                    stripped == *json0,
+                    "transform {k}: more than the transform changed"
+                );
+            }
+        }
+        // The atlas, where the transform is baked in, still hides the seams.
+        let atlas = BakeOptions {
+            atlas: Some(2048),
+            ..BakeOptions::default()
+        };
+        let baked = bake(
+            &scene,
+            &dir.path().join(format!("atlas{k}")),
+            &atlas,
+            &Silent,
+        )
+        .unwrap();
+        assert_hidden(&baked.report, &format!("transform {k} atlas"));
+    }
+    let rotation = |t: &serde_json::Value| t["rotation"].as_f64().unwrap();
+    assert!((rotation(&wall_transforms[1]) - 35f64.to_radians()).abs() < 1e-6);
+    assert!((wall_transforms[2]["scale"][0].as_f64().unwrap() - 1.0 / 6.5).abs() < 1e-6);
+    assert!((wall_transforms[2]["offset"][1].as_f64().unwrap() - 0.45).abs() < 1e-6);
+}
+
+#[test]
+fn a_bake_gives_the_same_bytes_on_one_or_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.toml", &small_scene(20.0, 9.0, [0.1, 0.2]));
+    let run = |threads: usize, name: &str| {
+        let out = dir.path().join(name);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| bake(&scene, &out, &BakeOptions::default(), &Silent).unwrap());
+        (
+            std::fs::read(out.join("scene.glb")).unwrap(),
+            std::fs::read(out.join("preview.png")).unwrap(),
+        )
+    };
+    assert!(
+        run(1, "one") == run(2, "two"),
+        "the .glb or preview differs with the thread count"
+    );
+}
+
+/// Cancels when the named stage begins.
+struct CancelAt(&'static str, std::sync::atomic::AtomicBool);
+impl Progress for CancelAt {
+    fn stage(&self, name: &str, _: u64) {
+        if name == self.0 {
+            self.1.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+    fn cancelled(&self) -> bool {
+        self.1.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+#[test]
+fn a_cancelled_bake_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.toml", &small_scene(0.0, 10.0, [0.0, 0.0]));
+    for stage in ["visibility", "facets", "writing"] {
+        let out = dir.path().join(format!("out-{stage}"));
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("scene.glb"), b"an earlier bake").unwrap();
+        let progress = CancelAt(stage, Default::default());
+        let result: Result<_> = bake(&scene, &out, &BakeOptions::default(), &progress);
+        assert!(
+            matches!(result, Err(Error::Cancelled)),
+            "cancelled at {stage}"
+        );
+        assert_eq!(files_in(&out), ["scene.glb"], "cancelled at {stage}");
+        assert_eq!(
+            std::fs::read(out.join("scene.glb")).unwrap(),
+            b"an earlier bake"
+        );
+    }
+}
+
+/// The error of baking `body` (as scene file `s.toml`), with the output
+/// folder checked to be left as it was; and the scene file's path and text.
+fn bake_error(body: &str) -> (String, (PathBuf, String)) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(dir.path(), "s.toml", body);
+    let out = dir.path().join("out");
+    let err = bake(&scene, &out, &BakeOptions::default(), &Silent)
+        .expect_err("the scene is refused")
+        .to_string();
+    assert!(files_in(&out).is_empty(), "{err}: output written");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    (err, (scene, text))
+}
+
+fn line_of((_, text): &(PathBuf, String), needle: &str) -> usize {
+    text.lines()
+        .position(|l| l.contains(needle))
+        .expect("needle in scene")
+        + 1
+}
+
+#[test]
+fn bad_scenes_get_errors_naming_the_key_and_line() {
+    let base = small_scene(0.0, 10.0, [0.0, 0.0]);
+
+    let (err, scene) = bake_error(&base.replace("\"ihc-glands\"", "\"liver-capsule\""));
+    assert!(
+        err.contains("facet 'myoma-1' texture: 'liver-capsule' is not in the tissue database"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, "liver-capsule"))),
+        "{err}"
+    );
+
+    let missing_mesh = "[[node]]\nname = \"organ\"\nmesh = { file = \"liver.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
+    let (err, _) = bake_error(missing_mesh);
+    assert!(
+        err.contains("line 4: node 'organ': mesh.file:") && err.contains("liver.obj not found"),
+        "{err}"
+    );
+
+    let (err, scene) = bake_error(
+        &base
+            .replace("radius = 7.0", "radius = 12.0")
+            .replace("height = 4.0", "height = 15.0"),
+    );
+    assert!(
+        err.contains("mesh.uterine_cavity.myoma[0].height")
+            && err.contains("larger than the cavity"),
+        "{err}"
+    );
+    assert!(err.contains(&scene.0.display().to_string()), "{err}");
+
+    let (err, scene) = bake_error(&base.replace("overlap = 2.0", "overlap = -1.0"));
+    assert!(
+        err.contains("facet 'myoma-1' overlap: must be 0 or more, not -1"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, "overlap = -1.0"))),
+        "{err}"
+    );
+
+    let (err, _) = bake_error(&format!("include = [\"s.toml\"]\n{base}"));
+    assert!(err.contains("include: the scene includes itself"), "{err}");
+
+    let (err, scene) = bake_error(&base.replace("bump = 1.0", "bump = 1.0\nshine = 2.0"));
+    assert!(err.contains("unknown field `shine`"), "{err}");
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, "shine"))),
+        "{err}"
+    );
+
+    let (err, _) = bake_error(&base.replace("name = \"myoma-1\"", "name = \"myoma-7\""));
+    assert!(
+        err.contains("facet 'myoma-7' is not a facet of the mesh (it has: wall, myoma-1)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn includes_bring_in_cameras_and_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    scene_file(dir.path(), "part.toml", &small_scene(0.0, 10.0, [0.0, 0.0]));
+    let main = scene_file(
+        dir.path(),
+        "main.toml",
+        "name = \"combined\"\ninclude = [\"part.toml\"]\n",
+    );
+    let spec = organtex::scene::file::load(&main).unwrap();
+    assert_eq!(spec.name, "combined");
+    assert_eq!(spec.cameras.len(), 1);
+    assert_eq!(spec.nodes.len(), 1);
+    assert_eq!(spec.nodes[0].facets.len(), 2);
+}

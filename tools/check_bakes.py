@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Bake every scene in scenes/ and check the .glb files with other tools.
+
+For each scene (layered; the default scene also with --atlas 2048):
+- the Khronos glTF validator (npm gltf-validator, installed under
+  target/gltf-validator when missing) must report 0 errors;
+- trimesh, an independent glTF reader, must load it with one node per facet
+  named in report.json, every primitive with texture coordinates and a
+  decoded texture image, layered bakes with their texture transforms and
+  blend layers carrying vertex alpha;
+- report.json's contrast figures must be within the targets: seams and
+  facet borders <= 1.2 blended, and above that unblended wherever seams or
+  borders exist (the blend must be what hides them).
+
+Usage: tools/check_bakes.py [--organtex target/release/organtex] [--out DIR]
+Exits 1 on any failure.
+"""
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pyenv  # noqa: E402
+
+ROOT = pyenv.ROOT
+REQUIREMENTS = ["trimesh==4.12.2", "numpy", "pillow"]
+VALIDATOR = ROOT / "target" / "gltf-validator"
+TARGET = 1.2
+
+
+def ensure_validator():
+    if (VALIDATOR / "node_modules" / "gltf-validator").is_dir():
+        return
+    if shutil.which("npm") is None:
+        sys.exit("check_bakes.py: npm is needed for the glTF validator (tools/test.sh installs it)")
+    VALIDATOR.mkdir(parents=True, exist_ok=True)
+    print("check_bakes.py: installing gltf-validator", flush=True)
+    subprocess.run(["npm", "install", "--silent", "--no-audit", "--no-fund", "--prefix", str(VALIDATOR), "gltf-validator@2.0.0-dev.3.10"], check=True)
+
+
+def read_json(glb):
+    data = glb.read_bytes()
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20 : 20 + length])
+
+
+def check_glb(glb, report, failures):
+    """Load `glb` with trimesh: every primitive (trimesh makes each its own
+    geometry) with its vertices, texture coordinates and decoded texture."""
+    import trimesh
+
+    doc = read_json(glb)
+    primitives = sum(len(m["primitives"]) for m in doc["meshes"])
+    scene = trimesh.load(str(glb), force="scene", process=False)
+    if len(scene.geometry) != primitives:
+        failures.append(f"{glb}: trimesh read {len(scene.geometry)} primitives of {primitives}")
+    for name, geometry in scene.geometry.items():
+        visual = geometry.visual
+        uv = getattr(visual, "uv", None)
+        if len(geometry.faces) == 0 or uv is None or len(uv) != len(geometry.vertices):
+            failures.append(f"{glb}: {name} has no faces or texture coordinates")
+        material = getattr(visual, "material", None)
+        image = getattr(material, "baseColorTexture", None) if material is not None else None
+        if image is None or min(image.size) < 64:
+            failures.append(f"{glb}: {name} has no decoded base colour texture")
+    return len(scene.geometry)
+
+
+def check_json(glb, report, failures):
+    """One node per facet, and what trimesh does not expose: texture
+    transforms and vertex alpha."""
+    doc = read_json(glb)
+    nodes = sorted(n["name"] for n in doc["nodes"])
+    expected = sorted(f"{f['node']}/{f['facet']}" for f in report["facets"])
+    if nodes != expected:
+        failures.append(f"{glb}: nodes {nodes}, report facets {expected}")
+    if report["mode"] == "layered":
+        if "KHR_texture_transform" not in doc.get("extensionsUsed", []):
+            failures.append(f"{glb}: layered bake without KHR_texture_transform")
+        blended = [m for m in doc["materials"] if m.get("alphaMode") == "BLEND"]
+        if not blended:
+            failures.append(f"{glb}: layered bake without blend layers")
+        for mesh in doc["meshes"]:
+            for p in mesh["primitives"]:
+                if doc["materials"][p["material"]].get("alphaMode") == "BLEND" and "COLOR_0" not in p["attributes"]:
+                    failures.append(f"{glb}: {mesh['name']} has a blend layer without vertex alpha")
+    elif any(m.get("alphaMode") == "BLEND" for m in doc["materials"]):
+        failures.append(f"{glb}: atlas bake with blend layers")
+
+
+def check_figures(name, report, failures):
+    lines = []
+    for f in report["facets"]:
+        blended, plain = f["seam_contrast"], f["seam_contrast_unblended"]
+        if blended is None:
+            continue
+        lines.append(f"  {f['node']}/{f['facet']}: seam contrast {blended:.2f} (unblended {plain:.2f})")
+        if blended > TARGET:
+            failures.append(f"{name}: {f['facet']} seam contrast {blended:.2f} > {TARGET}")
+        if plain <= blended:
+            failures.append(f"{name}: {f['facet']} seams show no less with blending ({blended:.2f} vs {plain:.2f})")
+    for b in report["borders"]:
+        blended, plain = b["border_contrast"], b["border_contrast_unblended"]
+        if blended is None:
+            continue
+        lines.append(f"  {b['node']} facet borders: contrast {blended:.2f} (unblended {plain:.2f})")
+        if blended > TARGET:
+            failures.append(f"{name}: {b['node']} border contrast {blended:.2f} > {TARGET}")
+        if plain <= blended:
+            failures.append(f"{name}: {b['node']} borders show no less with blending")
+    print("\n".join(lines))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
+    parser.add_argument("--out", default=str(ROOT / "target" / "bake-check"))
+    args = parser.parse_args()
+    ensure_validator()
+
+    out = Path(args.out)
+    jobs = []
+    for scene in sorted((ROOT / "scenes").glob("*.toml")):
+        jobs.append((scene.stem, scene, []))
+        if scene.stem == "hysteroscopy_myomas":
+            jobs.append((scene.stem + "-atlas", scene, ["--atlas", "2048"]))
+    failures = []
+    glbs = []
+    for name, scene, extra in jobs:
+        target = out / name
+        print(f"\n== bake {name}", flush=True)
+        run = subprocess.run([args.organtex, "bake", str(scene), "-o", str(target), *extra], capture_output=True, text=True)
+        if run.returncode != 0:
+            failures.append(f"{name}: bake failed: {run.stderr.strip()}")
+            continue
+        report = json.loads((target / "report.json").read_text())
+        glb = target / "scene.glb"
+        glbs.append(glb)
+        count = check_glb(glb, report, failures)
+        check_json(glb, report, failures)
+        print(f"  trimesh loaded {count} primitives; baked in {report['timings']['total_s']:.1f} s")
+        check_figures(name, report, failures)
+
+    print("\n== glTF validator", flush=True)
+    validator = subprocess.run(["node", str(ROOT / "tools" / "validate_gltf.js"), *map(str, glbs)], env={"GLTF_VALIDATOR_DIR": str(VALIDATOR / "node_modules" / "gltf-validator"), "PATH": shutil.os.environ.get("PATH", "")})
+    if validator.returncode != 0:
+        failures.append("the glTF validator reported errors")
+    if failures:
+        print("\nFAILED:\n  " + "\n  ".join(failures))
+        sys.exit(1)
+    print("\nall bakes valid")
+
+
+if __name__ == "__main__":
+    pyenv.ensure(REQUIREMENTS, __file__)
+    main()

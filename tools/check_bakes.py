@@ -93,26 +93,18 @@ def check_json(glb, report, failures):
 
 
 def check_figures(name, report, failures):
-    lines = []
-    for f in report["facets"]:
-        blended, plain = f["seam_contrast"], f["seam_contrast_unblended"]
+    """Seam and border contrast within the target, and lower than without
+    blending."""
+    figures = [(f"{f['node']}/{f['facet']} seam", f["seam_contrast"], f["seam_contrast_unblended"]) for f in report["facets"]]
+    figures += [(f"{b['node']} facet border", b["border_contrast"], b["border_contrast_unblended"]) for b in report["borders"]]
+    for what, blended, plain in figures:
         if blended is None:
             continue
-        lines.append(f"  {f['node']}/{f['facet']}: seam contrast {blended:.2f} (unblended {plain:.2f})")
+        print(f"  {what} contrast {blended:.2f} (unblended {plain:.2f})")
         if blended > TARGET:
-            failures.append(f"{name}: {f['facet']} seam contrast {blended:.2f} > {TARGET}")
+            failures.append(f"{name}: {what} contrast {blended:.2f} > {TARGET}")
         if plain <= blended:
-            failures.append(f"{name}: {f['facet']} seams show no less with blending ({blended:.2f} vs {plain:.2f})")
-    for b in report["borders"]:
-        blended, plain = b["border_contrast"], b["border_contrast_unblended"]
-        if blended is None:
-            continue
-        lines.append(f"  {b['node']} facet borders: contrast {blended:.2f} (unblended {plain:.2f})")
-        if blended > TARGET:
-            failures.append(f"{name}: {b['node']} border contrast {blended:.2f} > {TARGET}")
-        if plain <= blended:
-            failures.append(f"{name}: {b['node']} borders show no less with blending")
-    print("\n".join(lines))
+            failures.append(f"{name}: {what} shows no less with blending ({blended:.2f} vs {plain:.2f})")
 
 
 def main():

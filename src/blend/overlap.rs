@@ -13,7 +13,7 @@
 use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::repair::make_manifold_traced;
 use crate::mesh::submesh::{extract, smooth_region};
-use crate::mesh::{EdgeId, FaceId, Topology, TriMesh, VertexId};
+use crate::mesh::{FaceId, Topology, TriMesh, VertexId};
 
 /// One facet's submesh: its own faces first, then its ring.
 #[derive(Clone, Debug)]
@@ -31,6 +31,21 @@ pub struct FacetPiece {
     pub alpha: Vec<f32>,
 }
 
+impl FacetPiece {
+    /// Corner `i` of piece face `f` is corner `order[i]` of its face in
+    /// `node_mesh`.
+    pub fn corner_order(&self, node_mesh: &TriMesh, f: usize) -> [usize; 3] {
+        let node_face = node_mesh.triangles[self.face_origin[f] as usize];
+        self.mesh.triangles[f].map(|v| {
+            let origin = self.vertex_origin[v as usize];
+            node_face
+                .iter()
+                .position(|&n| n == origin)
+                .expect("a piece face is its node face")
+        })
+    }
+}
+
 /// Alpha at distance `d` from the facet, for a ring `width` wide: 1 up to a
 /// third of the width, then a smoothstep down to 0 at the width.
 pub fn ring_alpha(d: f64, width: f64) -> f32 {
@@ -43,12 +58,7 @@ pub fn ring_alpha(d: f64, width: f64) -> f32 {
 pub fn facet_pieces(mesh: &TriMesh, topo: &Topology, overlap: &[f64]) -> Vec<FacetPiece> {
     let facets = mesh.facets.as_ref().expect("a node mesh has facets");
     let graph = EdgeGraph::new(topo);
-    let length: Vec<f64> = (0..graph.num_edges())
-        .map(|e| {
-            let [a, b] = graph.ends(EdgeId::from(e));
-            (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
-        })
-        .collect();
+    let length = graph.lengths(&mesh.positions);
     (0..facets.names.len() as u32)
         .filter(|&f| facets.of_face.contains(&f))
         .map(|facet| {

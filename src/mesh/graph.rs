@@ -59,6 +59,14 @@ impl EdgeGraph {
         self.ends[e.idx()]
     }
 
+    /// The length of every edge, its ends at `positions`.
+    pub fn lengths(&self, positions: &[glam::DVec3]) -> Vec<f64> {
+        self.ends
+            .iter()
+            .map(|[a, b]| (positions[a.idx()] - positions[b.idx()]).length())
+            .collect()
+    }
+
     /// The end of `e` that is not `v`.
     #[inline]
     pub fn other(&self, e: EdgeId, v: VertexId) -> VertexId {

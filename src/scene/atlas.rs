@@ -144,16 +144,7 @@ pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size:
         });
     }
     let node_order: Vec<[usize; 3]> = (0..piece.own)
-        .map(|f| {
-            let node_tri = node.mesh.triangles[piece.face_origin[f] as usize];
-            piece.mesh.triangles[f].map(|v| {
-                let o = piece.vertex_origin[v as usize];
-                node_tri
-                    .iter()
-                    .position(|&n| n == o)
-                    .expect("a piece face is its node face")
-            })
-        })
+        .map(|f| piece.corner_order(&node.mesh, f))
         .collect();
     atlas
         .pixels

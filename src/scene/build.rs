@@ -335,18 +335,6 @@ pub fn overlay_transform(s: &FacetSettings) -> Transform {
     }
 }
 
-/// Corner `i` of piece face `f` is corner `order[i]` of its node face.
-fn corner_order(piece: &FacetPiece, node_mesh: &TriMesh, f: usize) -> [usize; 3] {
-    let node_face = node_mesh.triangles[piece.face_origin[f] as usize];
-    piece.mesh.triangles[f].map(|v| {
-        let origin = piece.vertex_origin[v as usize];
-        node_face
-            .iter()
-            .position(|&n| n == origin)
-            .expect("a piece face is its node face")
-    })
-}
-
 /// Reorder per-corner values of a piece face into its node face's order.
 fn to_node_order<T: Copy + Default>(values: [T; 3], order: [usize; 3]) -> [T; 3] {
     let mut out = [T::default(); 3];
@@ -400,7 +388,7 @@ fn compositors(
             band[b.face as usize] = Some(b);
         }
         for (f, band) in band.iter().enumerate() {
-            let order = corner_order(&bf.piece, mesh, f);
+            let order = bf.piece.corner_order(mesh, f);
             let layer = Layer {
                 look,
                 uv: to_node_order(uvs.triangles[f].map(|c| uvs.coords[c as usize]), order),

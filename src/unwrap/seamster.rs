@@ -109,12 +109,7 @@ pub fn choose(
     progress: &dyn Progress,
 ) -> Result<Seams> {
     let graph = EdgeGraph::new(topo);
-    let length: Vec<f64> = (0..graph.num_edges())
-        .map(|e| {
-            let [a, b] = graph.ends(EdgeId::from(e));
-            (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
-        })
-        .collect();
+    let length = graph.lengths(&mesh.positions);
     let curvature = Curvature::compute(mesh, topo);
     // Never-seen edges still cost their length, a little.
     let hidden = 1.0 / views.max(1) as f64;

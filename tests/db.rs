@@ -1,8 +1,9 @@
-//! The tissue database: the shipped index opens, and building an entry
-//! twice gives the same bytes.
+//! The tissue database: the shipped index opens, building an entry twice
+//! gives the same bytes, and built outputs know when they are out of date.
 
 use std::path::PathBuf;
 
+use organtex::db::build::is_current;
 use organtex::db::{Database, Output, build};
 use organtex::progress::Silent;
 
@@ -67,4 +68,16 @@ seed = 3
     assert!(runs[0] == runs[1]);
     let built = build(&db, &["small".into()], &Silent).unwrap();
     assert!(built[0].quality.as_ref().unwrap().seam <= 1.15);
+
+    // Built outputs are current until the entry or its source changes.
+    let small = db.tissue("small").unwrap();
+    assert!(is_current(&db, small).unwrap());
+    let index = dir.path().join("index.toml");
+    let text = std::fs::read_to_string(&index).unwrap();
+    std::fs::write(&index, text.replace("seed = 3", "seed = 4")).unwrap();
+    let edited = Database::open(dir.path()).unwrap();
+    assert!(!is_current(&edited, edited.tissue("small").unwrap()).unwrap());
+    std::fs::write(&index, text).unwrap();
+    std::fs::remove_file(db.output_path("small", Output::Height)).unwrap();
+    assert!(!is_current(&db, small).unwrap(), "an output is missing");
 }

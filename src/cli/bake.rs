@@ -74,8 +74,9 @@ fn print(baked: &Baked) {
     for b in &r.borders {
         if b.border_contrast.is_some() {
             println!(
-                "  {} facet borders: contrast {} (unblended {})",
+                "  {} facet borders ({} edges): contrast {} (unblended {})",
                 b.node,
+                b.border_edges,
                 figure(b.border_contrast),
                 figure(b.border_contrast_unblended)
             );

@@ -17,13 +17,59 @@ use crate::synth::height::{exemplar_height, synthesis_height};
 use crate::synth::quality::{Quality, Rgb, measure};
 use crate::synth::{mask, vessels};
 
+/// Bump when a change to synthesis, height maps or overlays changes what
+/// `build` writes for the same entry: outputs built under another recipe
+/// are then rebuilt when a bake needs them.
+pub const RECIPE: u32 = 1;
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Built {
     pub id: String,
+    /// What the outputs were built from (`fingerprint`).
+    pub fingerprint: String,
     pub outputs: Vec<Output>,
     pub usable_pixels: usize,
     pub quality: Option<Quality>,
     pub seconds: f64,
+}
+
+/// A digest of everything an entry's outputs depend on: the recipe, the
+/// entry's settings and its source (and mask) bytes. FNV-1a: a change
+/// detector, not a security measure, so no crate is needed for it.
+pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let mut feed = |bytes: &[u8]| {
+        for &b in bytes {
+            hash = (hash ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    feed(&RECIPE.to_le_bytes());
+    feed(serde_json::to_string(t).expect("serialises").as_bytes());
+    for file in std::iter::once(&t.source).chain(t.mask.as_ref()) {
+        let path = db.root.join(file);
+        feed(&std::fs::read(&path).map_err(|e| Error::io(&path, e))?);
+    }
+    Ok(format!("{hash:016x}"))
+}
+
+/// Whether `t`'s outputs are built and up to date.
+pub fn is_current(db: &Database, t: &Tissue) -> Result<bool> {
+    let dir = db.root.join("build").join(&t.id);
+    let Ok(text) = std::fs::read_to_string(dir.join("report.json")) else {
+        return Ok(false);
+    };
+    #[derive(serde::Deserialize)]
+    struct Stamp {
+        fingerprint: String,
+    }
+    let Ok(built) = serde_json::from_str::<Stamp>(&text) else {
+        return Ok(false);
+    };
+    let outputs = t
+        .outputs
+        .iter()
+        .all(|&o| db.output_path(&t.id, o).is_file());
+    Ok(outputs && built.fingerprint == fingerprint(db, t)?)
 }
 
 /// The exemplar an entry synthesises from: its source, cropped and masked.
@@ -130,6 +176,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
     }
     let built = Built {
         id: t.id.clone(),
+        fingerprint: fingerprint(db, t)?,
         outputs: t.outputs.clone(),
         usable_pixels: ex.valid.iter().filter(|&&v| v).count(),
         quality,

@@ -143,6 +143,8 @@ pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size:
             }
         });
     }
+    // Mesh units per texel: textures finer than that are averaged down.
+    let footprint = 1.0 / (atlas.scale * size as f64);
     let node_order: Vec<[usize; 3]> = (0..piece.own)
         .map(|f| piece.corner_order(&node.mesh, f))
         .collect();
@@ -165,7 +167,7 @@ pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size:
                 for i in 0..3 {
                     node_w[node_order[f][i]] = w[i];
                 }
-                let c = compositor.colour(piece.face_origin[f] as usize, node_w);
+                let c = compositor.colour_over(piece.face_origin[f] as usize, node_w, footprint);
                 *pixel = c.map(|v| (linear_to_srgb(v) * 255.0).round() as u8);
             }
         });

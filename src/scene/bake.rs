@@ -59,6 +59,8 @@ pub struct BorderLine {
     pub node: String,
     pub border_contrast: Option<f64>,
     pub border_contrast_unblended: Option<f64>,
+    /// Edges on facet borders.
+    pub border_edges: usize,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -174,6 +176,7 @@ pub fn bake(
             node: node.name.clone(),
             border_contrast: b.borders,
             border_contrast_unblended: u.borders,
+            border_edges: b.border_edges,
         });
     }
     let report = BakeReport {

@@ -105,7 +105,8 @@ pub fn build_scene(
     })
 }
 
-/// Build the database entries the scene uses whose outputs are missing.
+/// Build the database entries the scene uses whose outputs are missing or
+/// out of date (`db::build::is_current`).
 fn ensure_tissues(
     spec: &SceneSpec,
     database: &Database,
@@ -133,7 +134,7 @@ fn ensure_tissues(
             )));
         }
         let path = database.output_path(&id, output);
-        if !path.is_file() {
+        if !db::build::is_current(database, t)? {
             db::build(database, std::slice::from_ref(&id), &CancelOnly(progress))?;
         }
         let map = match output {

@@ -46,12 +46,67 @@ pub enum Wrap {
     Mirrored,
 }
 
-/// An RGBA image in linear light, ready to sample.
+/// An RGBA image in linear light, ready to sample, with its mip levels.
 #[derive(Clone, Debug)]
 pub struct Texture {
     pub width: usize,
     pub height: usize,
-    pub texels: Vec<[f32; 4]>,
+    /// Level 0 is the image; each next one half the size, box-filtered.
+    levels: Vec<Level>,
+}
+
+#[derive(Clone, Debug)]
+struct Level {
+    width: usize,
+    height: usize,
+    texels: Vec<[f32; 4]>,
+}
+
+impl Level {
+    /// Half the size, each texel the mean of the 2x2 it covers.
+    fn half(&self) -> Level {
+        let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
+        let at = |x: usize, y: usize| {
+            self.texels[y.min(self.height - 1) * self.width + x.min(self.width - 1)]
+        };
+        let texels = (0..w * h)
+            .map(|i| {
+                let (x, y) = (2 * (i % w), 2 * (i / w));
+                let q = [at(x, y), at(x + 1, y), at(x, y + 1), at(x + 1, y + 1)];
+                std::array::from_fn(|c| (q[0][c] + q[1][c] + q[2][c] + q[3][c]) / 4.0)
+            })
+            .collect();
+        Level {
+            width: w,
+            height: h,
+            texels,
+        }
+    }
+
+    /// Bilinear sample at texture coordinates `t`.
+    fn sample(&self, t: DVec2, wrap: Wrap) -> [f32; 4] {
+        let x = t.x * self.width as f64 - 0.5;
+        let y = t.y * self.height as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (i, j) = (x0 as i64, y0 as i64);
+        let index = |k: i64, n: usize| match wrap {
+            Wrap::Repeat => k.rem_euclid(n as i64) as usize,
+            Wrap::Mirrored => {
+                let period = 2 * n as i64;
+                let k = k.rem_euclid(period);
+                (if k < n as i64 { k } else { period - 1 - k }) as usize
+            }
+        };
+        let at =
+            |i: i64, j: i64| self.texels[index(j, self.height) * self.width + index(i, self.width)];
+        let corners = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
+        std::array::from_fn(|c| {
+            let top = corners[0][c] * (1.0 - fx) + corners[1][c] * fx;
+            let bottom = corners[2][c] * (1.0 - fx) + corners[3][c] * fx;
+            top * (1.0 - fy) + bottom * fy
+        })
+    }
 }
 
 pub fn srgb_to_linear(c: f32) -> f32 {
@@ -75,62 +130,66 @@ impl Texture {
     /// Read a PNG colour (sRGB) texture.
     pub fn load(path: &std::path::Path) -> Result<Texture> {
         let img = crate::synth::exemplar::read_image(path)?.to_rgba8();
-        Ok(Texture {
-            width: img.width() as usize,
-            height: img.height() as usize,
-            texels: img
-                .pixels()
-                .map(|p| {
-                    [
-                        srgb_to_linear(p[0] as f32 / 255.0),
-                        srgb_to_linear(p[1] as f32 / 255.0),
-                        srgb_to_linear(p[2] as f32 / 255.0),
-                        p[3] as f32 / 255.0,
-                    ]
-                })
-                .collect(),
-        })
-        .and_then(|t: Texture| {
-            if t.texels.is_empty() {
-                Err(Error::format(path, "the texture has no pixels"))
-            } else {
-                Ok(t)
-            }
-        })
+        if img.width() == 0 || img.height() == 0 {
+            return Err(Error::format(path, "the texture has no pixels"));
+        }
+        let texels = img
+            .pixels()
+            .map(|p| {
+                [
+                    srgb_to_linear(p[0] as f32 / 255.0),
+                    srgb_to_linear(p[1] as f32 / 255.0),
+                    srgb_to_linear(p[2] as f32 / 255.0),
+                    p[3] as f32 / 255.0,
+                ]
+            })
+            .collect();
+        Ok(Texture::new(
+            img.width() as usize,
+            img.height() as usize,
+            texels,
+        ))
+    }
+
+    /// A texture of `texels` (linear RGBA, row by row), with its mip levels.
+    pub fn new(width: usize, height: usize, texels: Vec<[f32; 4]>) -> Texture {
+        let mut levels = vec![Level {
+            width,
+            height,
+            texels,
+        }];
+        while let Some(last) = levels.last()
+            && (last.width > 1 || last.height > 1)
+        {
+            let next = last.half();
+            levels.push(next);
+        }
+        Texture {
+            width,
+            height,
+            levels,
+        }
     }
 
     /// Bilinear sample at texture coordinates `t` (0..1 across the image,
-    /// v downwards as in glTF).
+    /// v downwards as in glTF), of the full-size image.
     pub fn sample(&self, t: DVec2, wrap: Wrap) -> [f32; 4] {
-        let x = t.x * self.width as f64 - 0.5;
-        let y = t.y * self.height as f64 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        let (i, j) = (x0 as i64, y0 as i64);
-        let at = |i: i64, j: i64| match wrap {
-            Wrap::Repeat => {
-                self.texels[j.rem_euclid(self.height as i64) as usize * self.width
-                    + i.rem_euclid(self.width as i64) as usize]
-            }
-            Wrap::Mirrored => self.mirror(i, j),
-        };
-        let corners = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
-        let mut out = [0.0; 4];
-        for c in 0..4 {
-            let top = corners[0][c] * (1.0 - fx) + corners[1][c] * fx;
-            let bottom = corners[2][c] * (1.0 - fx) + corners[3][c] * fx;
-            out[c] = top * (1.0 - fy) + bottom * fy;
-        }
-        out
+        self.levels[0].sample(t, wrap)
     }
 
-    fn mirror(&self, i: i64, j: i64) -> [f32; 4] {
-        let m = |k: i64, n: usize| {
-            let period = 2 * n as i64;
-            let k = k.rem_euclid(period);
-            (if k < n as i64 { k } else { period - 1 - k }) as usize
-        };
-        self.texels[m(j, self.height) * self.width + m(i, self.width)]
+    /// Trilinear sample for a footprint `texels` image texels wide: the
+    /// image averaged over what one output sample covers, as a GPU's
+    /// mipmapping does, so an output coarser than the texture does not alias.
+    pub fn sample_filtered(&self, t: DVec2, wrap: Wrap, texels: f64) -> [f32; 4] {
+        let lod = texels.max(1.0).log2().min((self.levels.len() - 1) as f64);
+        let k = lod.floor() as usize;
+        let f = (lod - k as f64) as f32;
+        let a = self.levels[k].sample(t, wrap);
+        if f == 0.0 || k + 1 >= self.levels.len() {
+            return a;
+        }
+        let b = self.levels[k + 1].sample(t, wrap);
+        std::array::from_fn(|c| a[c] * (1.0 - f) + b[c] * f)
     }
 }
 
@@ -153,12 +212,19 @@ pub struct Look {
 }
 
 impl Look {
-    /// Linear RGB at chart coordinates `uv`.
-    pub fn colour(&self, textures: &[Texture], uv: DVec2) -> [f32; 3] {
-        let t = textures[self.colour].sample(self.transform.apply(uv), Wrap::Repeat);
+    /// Linear RGB at chart coordinates `uv`, averaged over `footprint`
+    /// mesh units (0: the full-size textures).
+    pub fn colour(&self, textures: &[Texture], uv: DVec2, footprint: f64) -> [f32; 3] {
+        let sample = |texture: &Texture, transform: &Transform, wrap| {
+            let texels = footprint
+                * transform.scale[0].abs().max(transform.scale[1].abs())
+                * texture.width.max(texture.height) as f64;
+            texture.sample_filtered(transform.apply(uv), wrap, texels)
+        };
+        let t = sample(&textures[self.colour], &self.transform, Wrap::Repeat);
         let mut c = [t[0], t[1], t[2]];
         if let Some(o) = &self.overlay {
-            let v = textures[o.texture].sample(o.transform.apply(uv), Wrap::Mirrored);
+            let v = sample(&textures[o.texture], &o.transform, Wrap::Mirrored);
             let a = (v[3] * o.opacity).clamp(0.0, 1.0);
             for i in 0..3 {
                 c[i] = c[i] * (1.0 - a) + v[i] * a;
@@ -193,15 +259,22 @@ fn interpolate<T: Copy + Into<f64>>(v: [T; 3], w: [f64; 3]) -> f64 {
 }
 
 impl Layer {
-    /// Linear RGB and alpha at barycentric `w`.
-    pub fn colour(&self, looks: &[Look], textures: &[Texture], w: [f64; 3]) -> ([f32; 3], f32) {
+    /// Linear RGB and alpha at barycentric `w`, averaged over `footprint`
+    /// mesh units.
+    pub fn colour(
+        &self,
+        looks: &[Look],
+        textures: &[Texture],
+        w: [f64; 3],
+        footprint: f64,
+    ) -> ([f32; 3], f32) {
         let at = |uv: [DVec2; 3]| uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2];
         let look = &looks[self.look];
-        let mut c = look.colour(textures, at(self.uv));
+        let mut c = look.colour(textures, at(self.uv), footprint);
         if let Some(band) = &self.band {
             let t = interpolate(band.alpha, w).clamp(0.0, 1.0) as f32;
             if t > 0.0 {
-                let d = look.colour(textures, at(band.uv));
+                let d = look.colour(textures, at(band.uv), footprint);
                 for i in 0..3 {
                     c[i] = c[i] * (1.0 - t) + d[i] * t;
                 }
@@ -226,9 +299,15 @@ impl Compositor {
     /// in at its alpha, so at a seam both sides show exactly the same
     /// half-and-half mix, under a later facet's ring as on its own faces.
     pub fn colour(&self, face: usize, w: [f64; 3]) -> [f32; 3] {
+        self.colour_over(face, w, 0.0)
+    }
+
+    /// `colour` averaged over `footprint` mesh units, for outputs coarser
+    /// than the textures (atlases, the preview's distant pixels).
+    pub fn colour_over(&self, face: usize, w: [f64; 3], footprint: f64) -> [f32; 3] {
         let mut out = [0.0f32; 3];
         for (k, layer) in self.layers[face].iter().enumerate() {
-            let (c, alpha) = layer.colour(&self.looks, &self.textures, w);
+            let (c, alpha) = layer.colour(&self.looks, &self.textures, w, footprint);
             let a = if k == 0 { 1.0 } else { alpha };
             for i in 0..3 {
                 out[i] = out[i] * (1.0 - a) + c[i] * a;

@@ -18,6 +18,9 @@ pub struct Contrast {
     pub seams: Vec<Option<f64>>,
     /// The same across facet borders.
     pub borders: Option<f64>,
+    /// How many edges the border figure is over (a short border gives a
+    /// noisy figure).
+    pub border_edges: usize,
 }
 
 fn jump(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -163,5 +166,6 @@ pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
             .map(|(s, p)| s.ratio(p))
             .collect(),
         borders: border.ratio(&near_border),
+        border_edges: border.0.len(),
     }
 }

@@ -105,7 +105,9 @@ pub fn render(scene: &BakedScene, width: usize, height: usize) -> RgbImage {
         let to_eye = (eye - p).normalize_or_zero();
         let falloff = 1.0 / (1.0 + (depth[i] / (1.5 * typical)).powi(2));
         let light = (0.15 + 0.85 * n.dot(to_eye).abs()) * (0.4 + 1.2 * falloff);
-        let c = node.compositor.colour(f, w);
+        // A pixel covers depth / focal mesh units (more where the surface
+        // is seen edge-on; this is the least, as mipmapping takes it).
+        let c = node.compositor.colour_over(f, w, depth[i] / focal);
         img.put_pixel(
             (i % width) as u32,
             (i / width) as u32,

@@ -75,17 +75,17 @@ impl EdgeGraph {
     }
 }
 
-/// A heap entry ordered by smallest distance first, ties by vertex id so the
+/// A `BinaryHeap` entry popped smallest distance first, ties by id so the
 /// search order is deterministic.
 #[derive(PartialEq)]
-struct Entry(f64, u32);
-impl Eq for Entry {}
-impl Ord for Entry {
+pub struct Nearest(pub f64, pub u32);
+impl Eq for Nearest {}
+impl Ord for Nearest {
     fn cmp(&self, other: &Self) -> Ordering {
         other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
     }
 }
-impl PartialOrd for Entry {
+impl PartialOrd for Nearest {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
@@ -114,10 +114,10 @@ impl ShortestPaths {
             if distance[v.idx()] > 0.0 {
                 distance[v.idx()] = 0.0;
                 source[v.idx()] = label;
-                heap.push(Entry(0.0, v.0));
+                heap.push(Nearest(0.0, v.0));
             }
         }
-        while let Some(Entry(d, v)) = heap.pop() {
+        while let Some(Nearest(d, v)) = heap.pop() {
             let v = VertexId(v);
             if d > distance[v.idx()] {
                 continue;
@@ -128,7 +128,7 @@ impl ShortestPaths {
                     distance[u.idx()] = nd;
                     via[u.idx()] = Some(e);
                     source[u.idx()] = source[v.idx()];
-                    heap.push(Entry(nd, u.0));
+                    heap.push(Nearest(nd, u.0));
                 }
             }
         }

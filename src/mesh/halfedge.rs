@@ -178,6 +178,17 @@ impl Topology {
         }
     }
 
+    /// The edge joining `a` and `b`, if any: a walk round both fans, so
+    /// O(valence) and no edge map to build.
+    pub fn edge_between(&self, a: VertexId, b: VertexId) -> Option<EdgeId> {
+        // At a boundary vertex the fan misses the one boundary edge that ends
+        // there, so look from both ends.
+        self.outgoing(a)
+            .find(|&h| self.tip(h) == b)
+            .or_else(|| self.outgoing(b).find(|&h| self.tip(h) == a))
+            .map(|h| self.edge(h))
+    }
+
     /// Whether `v` lies on a boundary loop (unreferenced vertices do not).
     pub fn is_boundary_vertex(&self, v: VertexId) -> bool {
         let h = self.vertex_halfedge[v.idx()];

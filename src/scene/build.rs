@@ -20,11 +20,11 @@ use crate::blend::seam::{BandFace, seam_bands};
 use crate::db::{self, Database, Output};
 use crate::error::{Error, Result};
 use crate::mesh::repair::make_manifold;
-use crate::mesh::{EdgeId, Facets, Topology, TriMesh, io};
+use crate::mesh::{Facets, Topology, TriMesh, io};
 use crate::progress::{CancelOnly, Progress, check};
 use crate::unwrap::flatten::Method;
 use crate::unwrap::metrics::UvMetrics;
-use crate::unwrap::visibility::{self, Viewpoints, Visibility};
+use crate::unwrap::visibility::{self, Viewpoints};
 use crate::unwrap::{UnwrapOptions, unwrap_seen};
 
 /// One facet, unwrapped, with its seam bands.
@@ -125,30 +125,36 @@ fn ensure_tissues(
         }
     }
     let mut tissues = Tissues::default();
-    for (id, output) in needed {
-        let t = database.tissue(&id)?;
-        if !t.outputs.contains(&output) {
+    let mut checked: Vec<&str> = Vec::new();
+    for (id, output) in &needed {
+        let t = database.tissue(id)?;
+        if !t.outputs.contains(output) {
             return Err(Error::invalid(format!(
                 "{}: tissue '{id}' has no {output:?} output; add it to its `outputs`",
                 database.root.join("index.toml").display()
             )));
         }
-        let path = database.output_path(&id, output);
-        if !db::build::is_current(database, t)? {
-            db::build(database, std::slice::from_ref(&id), &CancelOnly(progress))?;
+        // Once per entry: checking reads its sources, building makes all
+        // its outputs.
+        if !checked.contains(&id.as_str()) {
+            checked.push(id);
+            if !db::build::is_current(database, t)? {
+                db::build(database, std::slice::from_ref(id), &CancelOnly(progress))?;
+            }
         }
         let map = match output {
             Output::Colour => &mut tissues.colour,
             Output::Height => &mut tissues.height,
             Output::Overlay => &mut tissues.overlay,
         };
-        map.insert(id, path);
+        map.insert(id.clone(), database.output_path(id, *output));
     }
     Ok(tissues)
 }
 
-/// The node's mesh: read or generated, repaired if needed, with facets.
-pub fn node_mesh(node: &NodeSpec) -> Result<TriMesh> {
+/// The node's mesh, read or generated, repaired if needed, with facets; and
+/// its topology.
+fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
     let mut mesh = match &node.mesh {
         MeshSpec::File(path) => io::read(path)?,
         MeshSpec::UterineCavity(params) => uterus::generate(params).map_err(|e| {
@@ -158,16 +164,20 @@ pub fn node_mesh(node: &NodeSpec) -> Result<TriMesh> {
             ))
         })?,
     };
-    if Topology::build(&mesh).is_err() {
-        mesh = make_manifold(&mesh).0;
-    }
+    let topology = match Topology::build(&mesh) {
+        Ok(t) => t,
+        Err(_) => {
+            mesh = make_manifold(&mesh).0;
+            Topology::build(&mesh)?
+        }
+    };
     if mesh.facets.is_none() {
         mesh.facets = Some(Facets {
             names: vec!["surface".into()],
             of_face: vec![0; mesh.num_faces()],
         });
     }
-    Ok(mesh)
+    Ok((mesh, topology))
 }
 
 /// Each of the mesh's facets' settings: the entry named after it, else the
@@ -209,9 +219,8 @@ fn build_node(
     for_atlases: bool,
     progress: &dyn Progress,
 ) -> Result<BakedNode> {
-    let mesh = node_mesh(node)?;
+    let (mesh, topology) = node_mesh(node)?;
     let settings = match_facets(node, &mesh)?;
-    let topology = Topology::build(&mesh)?;
     let viewpoints = if spec.cameras.is_empty() {
         Viewpoints::Orbit {
             views: spec.bake.views,
@@ -229,12 +238,6 @@ fn build_node(
     let pieces = facet_pieces(&mesh, &topology, &overlaps);
     progress.stage("facets", pieces.len() as u64);
     let quiet = CancelOnly(progress);
-    let edge_index: HashMap<[u32; 2], EdgeId> = (0..topology.num_edges())
-        .map(|e| {
-            let [a, b] = topology.edge_vertices(EdgeId::from(e));
-            ([a.0.min(b.0), a.0.max(b.0)], EdgeId::from(e))
-        })
-        .collect();
     let names = mesh.facets.as_ref().expect("facets").names.clone();
     let facets: Vec<BakedFacet> = pieces
         .into_par_iter()
@@ -242,22 +245,7 @@ fn build_node(
             let start = Instant::now();
             let facet_settings = settings[piece.facet as usize].clone();
             let piece_topo = Topology::build(&piece.mesh)?;
-            let piece_seen = Visibility {
-                vertex: piece
-                    .vertex_origin
-                    .iter()
-                    .map(|&v| seen.vertex[v as usize])
-                    .collect(),
-                edge: (0..piece_topo.num_edges())
-                    .map(|e| {
-                        let [a, b] = piece_topo
-                            .edge_vertices(EdgeId::from(e))
-                            .map(|v| piece.vertex_origin[v.idx()]);
-                        seen.edge[edge_index[&[a.min(b), a.max(b)]].idx()]
-                    })
-                    .collect(),
-                views: seen.views,
-            };
+            let piece_seen = seen.restrict(&topology, &piece.vertex_origin, &piece_topo);
             let opts = UnwrapOptions {
                 split_overlaps: for_atlases,
                 ..UnwrapOptions::default()

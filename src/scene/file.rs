@@ -341,43 +341,34 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
     let mut facets = Vec::new();
     for f in &node.facets {
         let name = f.name.get_ref().clone();
-        let key = |k: &str| format!("facet '{name}' {k}");
-        let positive = |v: &Spanned<f64>, k: &str| -> Result<f64> {
-            let x = *v.get_ref();
-            if x.is_finite() && x > 0.0 {
-                Ok(x)
-            } else {
-                Err(at(
-                    v.span(),
-                    &key(k),
-                    format!("must be a positive number, not {x}"),
-                ))
-            }
-        };
-        let overlap = *f.overlap.get_ref();
-        if !(overlap.is_finite() && overlap >= 0.0) {
-            return Err(at(
-                f.overlap.span(),
-                &key("overlap"),
-                format!("must be 0 or more, not {overlap}"),
-            ));
-        }
-        let bump = *f.bump.get_ref();
-        if !(0.0..=10.0).contains(&bump) {
-            return Err(at(
-                f.bump.span(),
-                &key("bump"),
-                format!("must be from 0 to 10, not {bump}"),
-            ));
-        }
-        let opacity = *f.overlay_opacity.get_ref();
-        if !(0.0..=1.0).contains(&opacity) {
-            return Err(at(
-                f.overlay_opacity.span(),
-                &key("overlay_opacity"),
-                format!("must be from 0 to 1, not {opacity}"),
-            ));
-        }
+        // A value within its range, or an error naming the key and line.
+        let checked =
+            |v: &Spanned<f64>, k: &str, ok: fn(f64) -> bool, range: &str| -> Result<f64> {
+                let x = *v.get_ref();
+                if x.is_finite() && ok(x) {
+                    Ok(x)
+                } else {
+                    Err(at(
+                        v.span(),
+                        &format!("facet '{name}' {k}"),
+                        format!("must be {range}, not {x}"),
+                    ))
+                }
+            };
+        let positive = |v: &Spanned<f64>, k: &str| checked(v, k, |x| x > 0.0, "a positive number");
+        let overlap = checked(&f.overlap, "overlap", |x| x >= 0.0, "0 or more")?;
+        let bump = checked(
+            &f.bump,
+            "bump",
+            |x| (0.0..=10.0).contains(&x),
+            "from 0 to 10",
+        )?;
+        let opacity = checked(
+            &f.overlay_opacity,
+            "overlay_opacity",
+            |x| (0.0..=1.0).contains(&x),
+            "from 0 to 1",
+        )?;
         let tile_size = positive(&f.tile_size, "tile_size")?;
         facets.push(FacetSettings {
             name: name.clone(),

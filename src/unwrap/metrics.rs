@@ -45,6 +45,16 @@ fn uv(layer: &UvLayer, f: usize, i: usize) -> DVec2 {
 
 /// Interior edges of `topo` across which the uvs jump.
 pub fn seam_edges(topo: &Topology, layer: &UvLayer) -> Vec<EdgeId> {
+    split_edges(topo, |(f, i), (g, j)| uv(layer, f, i) != uv(layer, g, j))
+}
+
+/// Interior edges whose ends differ between their two faces by `differs`,
+/// which is given the (face, corner) pairs of the same vertex.
+pub fn split_edges(
+    topo: &Topology,
+    differs: impl Fn((usize, usize), (usize, usize)) -> bool,
+) -> Vec<EdgeId> {
+    let corner = |h: crate::mesh::HalfedgeId| (h.idx() / 3, h.idx() % 3);
     (0..topo.num_edges())
         .map(EdgeId::from)
         .filter(|&e| {
@@ -53,14 +63,8 @@ pub fn seam_edges(topo: &Topology, layer: &UvLayer) -> Vec<EdgeId> {
                 return false;
             };
             // h runs a -> b in its face, t runs b -> a in its own.
-            let corner = |h: crate::mesh::HalfedgeId| (h.idx() / 3, h.idx() % 3);
-            let (fh, ih) = corner(h);
-            let (ft, it) = corner(t);
-            let a_here = uv(layer, fh, ih);
-            let b_here = uv(layer, fh, (ih + 1) % 3);
-            let b_there = uv(layer, ft, it);
-            let a_there = uv(layer, ft, (it + 1) % 3);
-            a_here != a_there || b_here != b_there
+            let ((f, i), (g, j)) = (corner(h), corner(t));
+            differs((f, i), (g, (j + 1) % 3)) || differs((f, (i + 1) % 3), (g, j))
         })
         .collect()
 }

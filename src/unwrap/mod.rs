@@ -20,7 +20,6 @@ pub mod steiner;
 pub mod terminals;
 pub mod visibility;
 
-use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::DVec2;
@@ -148,12 +147,6 @@ pub fn unwrap_seen(
     for (f, &c) in components.of_face.iter().enumerate() {
         faces_of[c as usize].push(FaceId::from(f));
     }
-    let edge_index: HashMap<[u32; 2], EdgeId> = (0..topology.num_edges())
-        .map(|e| {
-            let [a, b] = topology.edge_vertices(EdgeId::from(e));
-            ([a.0.min(b.0), a.0.max(b.0)], EdgeId::from(e))
-        })
-        .collect();
     // One piece reports its stages; many report one step per piece.
     let many = faces_of.len() > 1;
     let quiet = CancelOnly(progress);
@@ -164,7 +157,7 @@ pub fn unwrap_seen(
     let pieces: Vec<PieceResult> = faces_of
         .into_par_iter()
         .map(|faces| {
-            let piece = unwrap_piece(mesh, faces, &visibility, &edge_index, opts, piece_progress);
+            let piece = unwrap_piece(mesh, &topology, faces, &visibility, opts, piece_progress);
             if many {
                 progress.advance(1);
             }
@@ -187,7 +180,11 @@ pub fn unwrap_seen(
         }
         for [a, b] in &piece.seams {
             let (a, b) = (piece.origin[*a as usize], piece.origin[*b as usize]);
-            seams.push(edge_index[&[a.min(b), a.max(b)]]);
+            seams.push(
+                topology
+                    .edge_between(VertexId(a), VertexId(b))
+                    .expect("a piece's seams are edges of the mesh"),
+            );
         }
         terminals.extend(
             piece
@@ -224,32 +221,23 @@ pub fn unwrap_seen(
 
 fn unwrap_piece(
     mesh: &TriMesh,
+    topology: &Topology,
     faces: Vec<FaceId>,
     visibility: &Visibility,
-    edge_index: &HashMap<[u32; 2], EdgeId>,
     opts: &UnwrapOptions,
     progress: &dyn Progress,
 ) -> Result<PieceResult> {
     let t0 = Instant::now();
     let (piece, origin) = extract(mesh, &faces);
     let topo = Topology::build(&piece)?;
-    let vertex_visibility: Vec<f32> = origin
-        .iter()
-        .map(|&v| visibility.vertex[v as usize])
-        .collect();
-    let edge_visibility: Vec<f32> = (0..topo.num_edges())
-        .map(|e| {
-            let [a, b] = topo.edge_vertices(EdgeId::from(e)).map(|v| origin[v.idx()]);
-            visibility.edge[edge_index[&[a.min(b), a.max(b)]].idx()]
-        })
-        .collect();
+    let seen = visibility.restrict(topology, &origin, &topo);
     let component = Components::find(&topo).topology(&topo)[0].clone();
     let seams = seamster::choose(
         &piece,
         &topo,
-        &vertex_visibility,
-        &edge_visibility,
-        visibility.views,
+        &seen.vertex,
+        &seen.edge,
+        seen.views,
         &opts.seams,
         progress,
     )?;
@@ -292,7 +280,10 @@ fn unwrap_piece(
     let flatten_s = t1.elapsed().as_secs_f64();
     progress.advance(1);
 
-    let seam_edges = cut_edges(&topo, &cut_triangles);
+    // The Seamster cut and any chart splits.
+    let seam_edges = metrics::split_edges(&topo, |(f, i), (g, j)| {
+        cut_triangles[f][i] != cut_triangles[g][j]
+    });
     Ok(PieceResult {
         report: PieceReport {
             faces: faces.len(),
@@ -316,23 +307,6 @@ fn unwrap_piece(
         seams_s,
         flatten_s,
     })
-}
-
-/// Interior edges of `topo` whose two faces give an end different uv
-/// vertices: the Seamster cut and any chart splits.
-fn cut_edges(topo: &Topology, cut_triangles: &[[u32; 3]]) -> Vec<EdgeId> {
-    (0..topo.num_edges())
-        .map(EdgeId::from)
-        .filter(|&e| {
-            let h = topo.edge_halfedge(e);
-            let Some(t) = topo.twin(h) else { return false };
-            // h runs a -> b in its face, t runs b -> a in its own.
-            let (f, i) = (h.idx() / 3, h.idx() % 3);
-            let (g, j) = (t.idx() / 3, t.idx() % 3);
-            cut_triangles[f][i] != cut_triangles[g][(j + 1) % 3]
-                || cut_triangles[f][(i + 1) % 3] != cut_triangles[g][j]
-        })
-        .collect()
 }
 
 /// The upper-right corner of uvs that start at the origin.

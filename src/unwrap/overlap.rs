@@ -12,7 +12,6 @@
 //! worst, so flaps are few: small ones where a jagged facet border folds,
 //! a polyp's head where it spreads over the wall ring.
 
-use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 
 use glam::DVec2;
@@ -20,6 +19,7 @@ use glam::DVec2;
 use super::abf::AbfOptions;
 use super::flatten::{Method, flatten};
 use crate::error::Result;
+use crate::mesh::graph::Nearest;
 use crate::mesh::repair::make_manifold_traced;
 use crate::mesh::submesh::extract;
 use crate::mesh::{Components, FaceId, Topology, TriMesh};
@@ -269,8 +269,9 @@ fn distances(
         (a + b + c) / 3.0
     };
     let mut dist: HashMap<usize, f64> = HashMap::from([(seed, 0.0)]);
-    let mut heap = BinaryHeap::from([Reverse((Ordered(0.0), seed))]);
-    while let Some(Reverse((Ordered(d), f))) = heap.pop() {
+    let mut heap = BinaryHeap::from([Nearest(0.0, seed as u32)]);
+    while let Some(Nearest(d, f)) = heap.pop() {
+        let f = f as usize;
         if d > dist[&f] {
             continue;
         }
@@ -283,26 +284,11 @@ fn distances(
             let nd = d + (centroid(f) - centroid(g)).length();
             if nd <= limit && dist.get(&g).is_none_or(|&old| nd < old) {
                 dist.insert(g, nd);
-                heap.push(Reverse((Ordered(nd), g)));
+                heap.push(Nearest(nd, g as u32));
             }
         }
     }
     dist
-}
-
-/// An f64 ordered by `total_cmp`, for the heap.
-#[derive(Clone, Copy, PartialEq)]
-struct Ordered(f64);
-impl Eq for Ordered {}
-impl PartialOrd for Ordered {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Ordered {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
 }
 
 #[cfg(test)]

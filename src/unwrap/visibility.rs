@@ -15,7 +15,7 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::mesh::{EdgeId, Topology, TriMesh};
+use crate::mesh::{EdgeId, Topology, TriMesh, VertexId};
 use crate::progress::Progress;
 use crate::raster;
 
@@ -34,6 +34,28 @@ pub struct Visibility {
     /// Fraction of views that see each edge's midpoint, by `EdgeId`.
     pub edge: Vec<f32>,
     pub views: usize,
+}
+
+impl Visibility {
+    /// The visibility of a part of the mesh `whole` was built for: `part`'s
+    /// vertex `v` is `origin[v]` there, and its edges are the edges between
+    /// the matching vertices.
+    pub fn restrict(&self, whole: &Topology, origin: &[u32], part: &Topology) -> Visibility {
+        let vertex = |v: VertexId| VertexId(origin[v.idx()]);
+        Visibility {
+            vertex: origin.iter().map(|&v| self.vertex[v as usize]).collect(),
+            edge: (0..part.num_edges())
+                .map(|e| {
+                    let [a, b] = part.edge_vertices(EdgeId::from(e)).map(vertex);
+                    let e = whole
+                        .edge_between(a, b)
+                        .expect("a part's edges are edges of the whole");
+                    self.edge[e.idx()]
+                })
+                .collect(),
+            views: self.views,
+        }
+    }
 }
 
 /// `n` unit directions spread evenly over the sphere (Fibonacci lattice).

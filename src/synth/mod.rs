@@ -9,3 +9,4 @@ pub mod height;
 pub mod mask;
 pub mod quality;
 pub mod vessels;
+pub mod volume;

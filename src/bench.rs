@@ -14,6 +14,7 @@ use crate::mesh::curvature::Curvature;
 use crate::mesh::{Components, Topology, io};
 use crate::progress::Silent;
 use crate::scene::bake::{BakeOptions, bake};
+use crate::synth::block::{BlockOptions, synthesize_block};
 use crate::synth::exemplar::{Crop, Exemplar};
 use crate::synth::fnpts::{SynthOptions, synthesize};
 use crate::unwrap::{UnwrapOptions, unwrap};
@@ -120,6 +121,16 @@ pub fn workloads() -> Vec<Workload> {
             prepare: |root| synth_step(root, 256, 512),
         },
         Workload {
+            name: "synth3d 64",
+            what: "FNPTS block 64^3 from a 64x64 gravel crop (target < 10 s)",
+            prepare: |root| synth3d_step(root, 64),
+        },
+        Workload {
+            name: "synth3d 128",
+            what: "FNPTS block 128^3 from a 128x128 gravel crop (target < 60 s)",
+            prepare: |root| synth3d_step(root, 128),
+        },
+        Workload {
             name: "bake hysteroscopy_myomas",
             what: "the default scene: cavity, unwraps, blends, contrast, .glb, preview (target < 20 s)",
             prepare: |root| {
@@ -155,6 +166,26 @@ fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
     };
     Ok(Box::new(move || {
         synthesize(&exemplar, &opts, &Silent).map(drop)
+    }))
+}
+
+/// Synthesise a block `side` voxels a side from the top left `side`
+/// square of the database's gravel photograph.
+fn synth3d_step(root: &Path, side: usize) -> Result<Step> {
+    let gravel = root.join("database").join("sources").join("gravel.png");
+    let crop = Crop {
+        x: 0,
+        y: 0,
+        width: side as u32,
+        height: side as u32,
+    };
+    let exemplar = Exemplar::load(&gravel, None, Some(crop))?;
+    let opts = BlockOptions {
+        size: side,
+        ..BlockOptions::default()
+    };
+    Ok(Box::new(move || {
+        synthesize_block(std::slice::from_ref(&exemplar), &opts, &Silent).map(drop)
     }))
 }
 

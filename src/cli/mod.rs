@@ -7,6 +7,7 @@ mod generate;
 mod info;
 pub mod progress;
 mod synth;
+mod synth3d;
 mod unwrap;
 mod uv_metrics;
 
@@ -44,6 +45,9 @@ enum Command {
     /// Synthesise a texture (tileable with --tileable) from a masked
     /// exemplar photograph, pixel by pixel (FNPTS).
     Synth(synth::Args),
+    /// Synthesise a solid texture block that tiles in 3D from one exemplar
+    /// (isotropic tissue) or three (across x, y, z); writes NRRD.
+    Synth3d(synth3d::Args),
     /// Quality figures of a texture against its exemplar: coherence,
     /// completeness (7x7 patches, RMS) and tiling seam.
     SynthQuality(synth::QualityArgs),
@@ -65,6 +69,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Unwrap(args)) => unwrap::run(args),
         Some(Command::UvMetrics(args)) => uv_metrics::run(args),
         Some(Command::Synth(args)) => synth::run(args),
+        Some(Command::Synth3d(args)) => synth3d::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {

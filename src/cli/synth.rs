@@ -64,7 +64,7 @@ fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
     }
 }
 
-fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
+pub(super) fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
     let v: Vec<u32> = s
         .split(',')
         .map(|p| p.trim().parse::<u32>())

@@ -84,9 +84,9 @@ pub struct Synthesis {
 }
 
 /// Largest per-pixel cost: every channel off by 255.
-const MAX_PIXEL_COST: i64 = 3 * 255;
+pub(super) const MAX_PIXEL_COST: i64 = 3 * 255;
 /// Random candidates per visit.
-const RANDOM_CANDIDATES: usize = 2;
+pub(super) const RANDOM_CANDIDATES: usize = 2;
 
 pub fn synthesize(
     ex: &Exemplar,
@@ -232,11 +232,11 @@ fn check_options(opts: &SynthOptions) -> Result<()> {
 }
 
 /// Usable exemplar pixels grouped by colour at 4 bits per channel.
-struct ColourBuckets {
+pub(super) struct ColourBuckets {
     start: Vec<u32>,
     items: Vec<u32>,
     /// Every usable pixel, for random candidates.
-    usable: Vec<u32>,
+    pub(super) usable: Vec<u32>,
 }
 
 #[inline]
@@ -245,7 +245,7 @@ fn bucket(c: [u8; 3]) -> usize {
 }
 
 impl ColourBuckets {
-    fn new(src: &Exemplar) -> Self {
+    pub(super) fn new(src: &Exemplar) -> Self {
         let usable: Vec<u32> = (0..src.pixels.len() as u32)
             .filter(|&i| src.valid[i as usize])
             .collect();
@@ -270,7 +270,7 @@ impl ColourBuckets {
         }
     }
 
-    fn of(&self, c: [u8; 3]) -> &[u32] {
+    pub(super) fn of(&self, c: [u8; 3]) -> &[u32] {
         let b = bucket(c);
         &self.items[self.start[b] as usize..self.start[b + 1] as usize]
     }
@@ -488,7 +488,7 @@ impl<'a> Level<'a> {
 }
 
 /// The 8 neighbours of a pixel.
-const RING: [(i32, i32); 8] = [
+pub(super) const RING: [(i32, i32); 8] = [
     (-1, -1),
     (0, -1),
     (1, -1),
@@ -501,7 +501,7 @@ const RING: [(i32, i32); 8] = [
 
 /// The (2r+1)^2 offsets of the neighbourhood, nearest first, so the cost
 /// check can stop early on the pixels that matter most.
-fn window(r: i32) -> Vec<(i32, i32)> {
+pub(super) fn window(r: i32) -> Vec<(i32, i32)> {
     let mut w: Vec<(i32, i32)> = (-r..=r)
         .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
         .collect();

@@ -2,6 +2,7 @@
 //! (FNPTS), their quality figures, height maps, vessel overlays, and masks
 //! computed from the photographs.
 
+pub mod block;
 pub mod exemplar;
 pub mod filter;
 pub mod fnpts;

@@ -190,6 +190,41 @@ impl Pca {
     }
 }
 
+/// Figures of a solid texture across each axis against that axis's
+/// exemplar (one exemplar: the same for all): coherence and completeness
+/// are means over `slices` evenly spaced slices, the seam is
+/// `Volume::seam` across that axis.
+pub fn measure_block(
+    volume: &super::volume::Volume,
+    exemplars: &[Exemplar],
+    slices: usize,
+) -> [Quality; 3] {
+    std::array::from_fn(|axis| {
+        let exemplar = &exemplars[axis.min(exemplars.len() - 1)];
+        let n = volume.size[axis];
+        let count = slices.clamp(1, n);
+        let figures: Vec<Quality> = (0..count)
+            .map(|k| {
+                let (width, height, pixels) = volume.slice(axis, k * n / count);
+                measure(
+                    exemplar,
+                    &Rgb {
+                        width,
+                        height,
+                        pixels: &pixels,
+                    },
+                )
+            })
+            .collect();
+        let mean = |f: fn(&Quality) -> f64| figures.iter().map(f).sum::<f64>() / count as f64;
+        Quality {
+            coherence: mean(|q| q.coherence),
+            completeness: mean(|q| q.completeness),
+            seam: volume.seam(axis),
+        }
+    })
+}
+
 /// Mean jump across the wrap-around edges over the mean jump between
 /// interior neighbours; jumps are mean absolute RGB differences.
 pub fn seam(img: &Rgb) -> f64 {

@@ -89,6 +89,62 @@ impl Volume {
         }
     }
 
+    /// Mean colour jump between voxel planes `i` and `i + 1` (wrapped)
+    /// across `axis`.
+    fn plane_jump(&self, axis: usize, i: usize) -> f64 {
+        let next = (i + 1) % self.size[axis];
+        let (_, _, a) = self.slice(axis, i);
+        let (_, _, b) = self.slice(axis, next);
+        let sum: u64 = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (0..3).map(|k| p[k].abs_diff(q[k]) as u64).sum::<u64>())
+            .sum();
+        sum as f64 / (3 * a.len()) as f64
+    }
+
+    /// The tiling seam across `axis`: the jump across the wrap-around face
+    /// over the mean jump between inner neighbouring planes (1 = seamless),
+    /// as `quality::seam` in 2D.
+    pub fn seam(&self, axis: usize) -> f64 {
+        let n = self.size[axis];
+        if n < 2 {
+            return 1.0;
+        }
+        let inner = (0..n - 1).map(|i| self.plane_jump(axis, i)).sum::<f64>() / (n - 1) as f64;
+        if inner == 0.0 {
+            return 1.0;
+        }
+        self.plane_jump(axis, n - 1) / inner
+    }
+
+    /// A block that wraps around is as seamless wherever it starts, but
+    /// where it starts is where copies meet when tiled: roll it along each
+    /// axis so the tile faces fall where neighbouring planes differ least.
+    pub fn rolled_to_smoothest_wrap(self) -> Volume {
+        let shift: [usize; 3] = std::array::from_fn(|axis| {
+            let n = self.size[axis];
+            // Cutting between planes i and i + 1 starts the block at i + 1.
+            let jumps: Vec<f64> = (0..n).map(|i| self.plane_jump(axis, i)).collect();
+            let cut = (0..n)
+                .min_by(|&a, &b| jumps[a].total_cmp(&jumps[b]).then(a.cmp(&b)))
+                .unwrap_or(0);
+            (cut + 1) % n
+        });
+        let [nx, ny, nz] = self.size;
+        let voxels = (0..nx * ny * nz)
+            .map(|i| {
+                let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+                self.voxels[self.index(
+                    (x + shift[0]) % nx,
+                    (y + shift[1]) % ny,
+                    (z + shift[2]) % nz,
+                )]
+            })
+            .collect();
+        Volume { voxels, ..self }
+    }
+
     /// The NRRD file: header, blank line, raw RGB bytes.
     pub fn to_nrrd(&self) -> Vec<u8> {
         let [nx, ny, nz] = self.size;
@@ -140,7 +196,10 @@ impl Volume {
             }
             let Some((key, value)) = line.split_once(':') else {
                 // Key/value pairs (`key:=value`) carry no layout.
-                return Err(format!("header line {}: '{line}' is not 'field: value'", n + 1));
+                return Err(format!(
+                    "header line {}: '{line}' is not 'field: value'",
+                    n + 1
+                ));
             };
             if value.starts_with('=') {
                 continue;

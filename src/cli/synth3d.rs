@@ -1,0 +1,178 @@
+//! `organtex synth3d SRC --size N -o BLOCK.nrrd`: a solid texture block.
+
+use std::path::{Path, PathBuf};
+
+use organtex::synth::block::{BlockOptions, Method, synthesize_block};
+use organtex::synth::exemplar::{Crop, Exemplar};
+use organtex::synth::quality::measure_block;
+use organtex::synth::volume::Volume;
+use organtex::{Error, Result};
+
+use super::progress::Bars;
+use super::synth::parse_crop;
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MethodArg {
+    /// FNPTS with three plane neighbourhoods per voxel (seed 004, 3.3).
+    Fnpts,
+    /// Texture optimisation with histogram matching (Kopf et al. 2007).
+    Optimize,
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Exemplar photograph: what a slice across any axis should look like
+    /// (isotropic tissue), or, with --src-y and --src-z, across x.
+    source: PathBuf,
+    /// Exemplar for slices across y (needs --src-z; same size as SOURCE).
+    #[arg(long, value_name = "IMAGE", requires = "src_z")]
+    src_y: Option<PathBuf>,
+    /// Exemplar for slices across z (needs --src-y; same size as SOURCE).
+    #[arg(long, value_name = "IMAGE", requires = "src_y")]
+    src_z: Option<PathBuf>,
+    /// Mask of usable exemplar pixels, white usable (for every exemplar).
+    #[arg(long, value_name = "IMAGE")]
+    mask: Option<PathBuf>,
+    /// Use only this part of the exemplars: X,Y,WIDTH,HEIGHT in pixels.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
+    crop: Option<Crop>,
+    /// Voxels a side; a multiple of 2^(levels - 1).
+    #[arg(long, value_name = "N")]
+    size: usize,
+    #[arg(long, value_enum, default_value = "fnpts")]
+    method: MethodArg,
+    /// Seed: the same seed gives the same bytes.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Iterations per voxel and level (FNPTS's M; optimize: rounds).
+    #[arg(long, default_value_t = 3)]
+    iterations: usize,
+    /// Pyramid levels (default: as many as keep 16 voxels a side).
+    #[arg(long)]
+    levels: Option<usize>,
+    /// Side of each plane's square neighbourhood (odd).
+    #[arg(long, default_value_t = 5)]
+    neighbourhood: usize,
+    /// Weight of the occurrence cost (FNPTS; 0: the paper's cost alone).
+    #[arg(long, default_value_t = 0.1)]
+    occurrence: f64,
+    /// Edge length of a voxel in object units, written to the NRRD.
+    #[arg(long, default_value_t = 1.0)]
+    spacing: f64,
+    /// Output block, NRRD (raw uint8 RGB).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write a PNG montage of slices: a row per axis (x, y, z), four
+    /// evenly spaced slices each.
+    #[arg(long, value_name = "PNG")]
+    slices: Option<PathBuf>,
+}
+
+fn require_extension(path: &Path, ext: &str) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
+        _ => Err(Error::invalid(format!("the output must be a .{ext} file")).in_file(path)),
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    require_extension(&args.output, "nrrd")?;
+    if let Some(s) = &args.slices {
+        require_extension(s, "png")?;
+    }
+    if !(args.spacing.is_finite() && args.spacing > 0.0) {
+        return Err(Error::invalid(format!(
+            "--spacing must be a positive number, not {}",
+            args.spacing
+        )));
+    }
+    let mut paths = vec![args.source.clone()];
+    paths.extend(args.src_y.iter().chain(&args.src_z).cloned());
+    let exemplars = paths
+        .iter()
+        .map(|p| Exemplar::load(p, args.mask.as_deref(), args.crop))
+        .collect::<Result<Vec<_>>>()?;
+    for (p, e) in paths.iter().zip(&exemplars).skip(1) {
+        let first = &exemplars[0];
+        if (e.width, e.height) != (first.width, first.height) {
+            return Err(Error::invalid(format!(
+                "is {}x{} but {} is {}x{}; the exemplars must be the same size",
+                e.width,
+                e.height,
+                paths[0].display(),
+                first.width,
+                first.height
+            ))
+            .in_file(p));
+        }
+    }
+    let opts = BlockOptions {
+        size: args.size,
+        seed: args.seed,
+        iterations: args.iterations,
+        levels: args.levels,
+        neighbourhood: args.neighbourhood,
+        occurrence: args.occurrence,
+        method: match args.method {
+            MethodArg::Fnpts => Method::Fnpts,
+            MethodArg::Optimize => Method::Optimize,
+        },
+    };
+    let bars = Bars::new();
+    let start = std::time::Instant::now();
+    let volume = synthesize_block(&exemplars, &opts, &bars)?;
+    bars.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let volume = Volume {
+        spacing: args.spacing,
+        ..volume
+    };
+    volume.write_nrrd(&args.output)?;
+    if let Some(path) = &args.slices {
+        organtex::atomic::write_png(path, &montage(&volume, 4))?;
+    }
+    println!(
+        "{}: {n}x{n}x{n} voxels from {} {}x{} exemplar(s) in {seconds:.2} s",
+        args.output.display(),
+        exemplars.len(),
+        exemplars[0].width,
+        exemplars[0].height,
+        n = args.size,
+    );
+    for (axis, q) in ["x", "y", "z"]
+        .iter()
+        .zip(measure_block(&volume, &exemplars, 4))
+    {
+        println!(
+            "  slices across {axis}: coherence {:.2}, completeness {:.2}, tiling seam {:.2}",
+            q.coherence, q.completeness, q.seam
+        );
+    }
+    Ok(())
+}
+
+/// A row of `per_axis` evenly spaced slices for each axis, 2 pixels apart.
+fn montage(volume: &Volume, per_axis: usize) -> image::DynamicImage {
+    let n = volume.size[0] as u32;
+    let gap = 2;
+    let k = per_axis as u32;
+    let mut img = image::RgbImage::from_pixel(
+        k * (n + gap) - gap,
+        3 * (n + gap) - gap,
+        image::Rgb([255; 3]),
+    );
+    for axis in 0..3 {
+        for s in 0..k {
+            let (w, _, pixels) = volume.slice(axis, (s * n / k) as usize);
+            for (i, p) in pixels.iter().enumerate() {
+                let (x, y) = ((i % w) as u32, (i / w) as u32);
+                img.put_pixel(
+                    s * (n + gap) + x,
+                    axis as u32 * (n + gap) + y,
+                    image::Rgb(*p),
+                );
+            }
+        }
+    }
+    image::DynamicImage::ImageRgb8(img)
+}

@@ -1,0 +1,856 @@
+//! 3D block synthesis: a solid texture that tiles space, from one exemplar
+//! (isotropic tissue) or three, one per axis (seed 004, section 3.3;
+//! DESIGN.md "3D block synthesis").
+//!
+//! A voxel has three 2D neighbourhoods, one in each axis plane: across x
+//! it spans (y, z), across y (x, z), across z (x, y), which is also how
+//! `Volume::slice` lays slices out. The plane across axis a is matched
+//! against that axis's exemplar E_a. Two methods share the neighbourhood
+//! cost, the candidate search and the pyramid:
+//!
+//! - `Fnpts` (seed 004, 3.3): FNPTS with the three neighbourhoods summed.
+//!   Each voxel holds ONE exemplar coordinate, the one minimising the sum;
+//!   the three exemplars must therefore be the same size. In plane a a
+//!   voxel shows E_a at its coordinate, and the block stores the mean of
+//!   those (with one exemplar: the exemplar's pixel itself). Iteration
+//!   weights n_i / M, masks, occurrence and the interleaved deterministic
+//!   visiting order are the 2D synthesiser's (fnpts.rs).
+//! - `Optimize` (Kopf et al. 2007 as reviewed in seed 002, 4.1, Figures
+//!   4.4-4.6): each voxel holds a best exemplar coordinate per plane
+//!   (search phase), then every voxel becomes the blend of what the
+//!   overlapping exemplar neighbourhoods put there, weighted by their
+//!   match distance^-1.2 and damped where the colour is already more
+//!   common in the block than in the exemplars (histogram matching). The
+//!   search uses the same candidates as FNPTS (coherence, same colour,
+//!   random) instead of PCA + ANN. Histograms are updated after each
+//!   interleaved class of voxels rather than after each voxel, so the
+//!   result does not depend on the thread count.
+//!
+//! Both wrap around in x, y and z, and the result is rolled so the tile
+//! faces fall where the texture is most continuous.
+
+use rayon::prelude::*;
+
+use super::exemplar::Exemplar;
+use super::fnpts::{ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, window};
+use super::volume::Volume;
+use crate::error::{Error, Result};
+use crate::progress::{Progress, check};
+use crate::rng;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    Fnpts,
+    Optimize,
+}
+
+#[derive(Clone, Debug)]
+pub struct BlockOptions {
+    /// Voxels a side.
+    pub size: usize,
+    pub seed: u64,
+    /// FNPTS: M, iterations per voxel and level; optimize: search and
+    /// blend rounds per level.
+    pub iterations: usize,
+    /// Pyramid levels; `None`: as many as keep the coarsest block and
+    /// exemplar at least 16 a side.
+    pub levels: Option<usize>,
+    /// Side of each square plane neighbourhood (odd).
+    pub neighbourhood: usize,
+    /// Weight of FNPTS's occurrence cost (0: the paper's cost alone).
+    pub occurrence: f64,
+    pub method: Method,
+}
+
+impl Default for BlockOptions {
+    fn default() -> Self {
+        BlockOptions {
+            size: 64,
+            seed: 0,
+            iterations: 3,
+            levels: None,
+            neighbourhood: 5,
+            occurrence: 0.1,
+            method: Method::Fnpts,
+        }
+    }
+}
+
+/// The two axes a plane spans, by the axis it is across.
+const PLANE_AXES: [(usize, usize); 3] = [(1, 2), (0, 2), (0, 1)];
+/// Smallest side of the coarsest block and exemplar the default pyramid
+/// keeps.
+const COARSEST: usize = 16;
+/// Histogram bins per channel (Kopf et al. use 16).
+const BINS: usize = 16;
+
+/// A solid texture from `exemplars`: one (the same in every plane) or
+/// three (across x, y and z), of equal size.
+pub fn synthesize_block(
+    exemplars: &[Exemplar],
+    opts: &BlockOptions,
+    progress: &dyn Progress,
+) -> Result<Volume> {
+    let levels = check_options(exemplars, opts)?;
+    let pyramid = pyramid(exemplars, opts.neighbourhood, levels)?;
+    progress.stage("block synthesis", (levels * opts.iterations) as u64);
+    let mut state: Option<Block> = None;
+    for (l, sources) in pyramid.iter().enumerate().rev() {
+        check(progress)?;
+        let grid = Grid(opts.size >> l);
+        let mut block = match state.take() {
+            None => Block::random(sources, grid, opts),
+            Some(coarse) => coarse.refine(sources, grid),
+        };
+        for round in 0..opts.iterations {
+            check(progress)?;
+            let key = [l as u64, round as u64];
+            match opts.method {
+                Method::Fnpts => block.fnpts_pass(opts, key),
+                Method::Optimize => block.optimize_round(opts, key),
+            }
+            progress.advance(1);
+        }
+        state = Some(block);
+    }
+    Ok(state
+        .expect("at least one level")
+        .volume()
+        .rolled_to_smoothest_wrap())
+}
+
+/// Check the options and exemplars; the number of pyramid levels.
+fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
+    if exemplars.len() != 1 && exemplars.len() != 3 {
+        return Err(Error::invalid(format!(
+            "a block is synthesised from 1 exemplar or 3 (across x, y, z), not {}",
+            exemplars.len()
+        )));
+    }
+    let (w, h) = (exemplars[0].width, exemplars[0].height);
+    if let Some(e) = exemplars.iter().find(|e| (e.width, e.height) != (w, h)) {
+        return Err(Error::invalid(format!(
+            "the exemplars must be the same size: {w}x{h} and {}x{}",
+            e.width, e.height
+        )));
+    }
+    let k = opts.neighbourhood;
+    if k.is_multiple_of(2) || !(3..=11).contains(&k) {
+        return Err(Error::invalid(format!(
+            "the neighbourhood must be odd, from 3 to 11, not {k}"
+        )));
+    }
+    if !(1..=16).contains(&opts.iterations) {
+        return Err(Error::invalid(format!(
+            "iterations must be from 1 to 16, not {}",
+            opts.iterations
+        )));
+    }
+    if !(0.0..=10.0).contains(&opts.occurrence) {
+        return Err(Error::invalid(format!(
+            "the occurrence weight must be from 0 to 10, not {}",
+            opts.occurrence
+        )));
+    }
+    let n = opts.size;
+    if !(k..=512).contains(&n) {
+        return Err(Error::invalid(format!(
+            "the block size must be from {k} (the neighbourhood) to 512 voxels, not {n}"
+        )));
+    }
+    let levels = match opts.levels {
+        Some(0) => return Err(Error::invalid("levels must be at least 1")),
+        Some(l) => l,
+        None => {
+            let mut l = 1;
+            while (n >> l) >= COARSEST && (w.min(h) >> l) >= COARSEST {
+                l += 1;
+            }
+            l
+        }
+    };
+    let step = 1usize << (levels - 1);
+    if !n.is_multiple_of(step) || n / step < k {
+        return Err(Error::invalid(format!(
+            "a block of {n} voxels does not fit {levels} pyramid levels: the size must be a multiple of {step} and at least {} (e.g. {}), or the levels fewer",
+            k * step,
+            n.max(k * step).next_multiple_of(step)
+        )));
+    }
+    Ok(levels)
+}
+
+/// The exemplars at one pyramid level. A coordinate may be copied only
+/// where every exemplar is usable.
+struct Sources {
+    /// The distinct exemplars, with the shared validity.
+    ex: Vec<Exemplar>,
+    /// Which of `ex` each axis plane matches.
+    of_axis: [usize; 3],
+    buckets: Vec<ColourBuckets>,
+}
+
+impl Sources {
+    fn width(&self) -> i32 {
+        self.ex[0].width as i32
+    }
+
+    /// The usable coordinate (sx, sy), if it is one.
+    #[inline]
+    fn usable(&self, sx: i32, sy: i32) -> Option<u32> {
+        let (w, h) = (self.width(), self.ex[0].height as i32);
+        if sx < 0 || sy < 0 || sx >= w || sy >= h {
+            return None;
+        }
+        let i = (sy * w + sx) as usize;
+        self.ex[0].valid[i].then_some(i as u32)
+    }
+
+    #[inline]
+    fn split(&self, c: u32) -> (i32, i32) {
+        (c as i32 % self.width(), c as i32 / self.width())
+    }
+
+    /// What a voxel copying coordinate `c` shows: the mean of the distinct
+    /// exemplars there.
+    fn mean_colour(&self, c: u32) -> [u8; 3] {
+        let n = self.ex.len() as u32;
+        let mut sum = [0u32; 3];
+        for e in &self.ex {
+            for (s, &v) in sum.iter_mut().zip(&e.pixels[c as usize]) {
+                *s += v as u32;
+            }
+        }
+        sum.map(|s| ((s + n / 2) / n) as u8)
+    }
+}
+
+/// Finest level first.
+fn pyramid(exemplars: &[Exemplar], k: usize, levels: usize) -> Result<Vec<Sources>> {
+    let mut chains: Vec<Vec<Exemplar>> = exemplars.iter().map(|e| vec![e.clone()]).collect();
+    for chain in &mut chains {
+        while chain.len() < levels {
+            let coarser = chain.last().and_then(|e| e.downsample(k)).ok_or_else(|| {
+                Error::invalid(format!(
+                    "{levels} pyramid levels need exemplars of at least {} pixels a side, with usable pixels at every level",
+                    k << (levels - 1)
+                ))
+            })?;
+            chain.push(coarser);
+        }
+    }
+    let of_axis = if exemplars.len() == 1 {
+        [0; 3]
+    } else {
+        [0, 1, 2]
+    };
+    (0..levels)
+        .map(|l| {
+            let valid: Vec<bool> = (0..chains[0][l].valid.len())
+                .map(|i| chains.iter().all(|c| c[l].valid[i]))
+                .collect();
+            if !valid.iter().any(|&v| v) {
+                return Err(Error::invalid(
+                    "the exemplars' masks leave no pixel usable in all of them",
+                ));
+            }
+            let ex: Vec<Exemplar> = chains
+                .iter()
+                .map(|c| Exemplar {
+                    valid: valid.clone(),
+                    ..c[l].clone()
+                })
+                .collect();
+            let buckets = ex.iter().map(ColourBuckets::new).collect();
+            Ok(Sources {
+                ex,
+                of_axis,
+                buckets,
+            })
+        })
+        .collect()
+}
+
+/// A cubic block of side n that wraps around.
+#[derive(Clone, Copy)]
+struct Grid(usize);
+
+impl Grid {
+    fn len(self) -> usize {
+        self.0 * self.0 * self.0
+    }
+
+    #[inline]
+    fn xyz(self, v: usize) -> [i32; 3] {
+        let n = self.0;
+        [(v % n) as i32, (v / n % n) as i32, (v / (n * n)) as i32]
+    }
+
+    /// The voxel at in-plane offset (du, dv) from `xyz` in the plane
+    /// across `axis`, wrapped.
+    #[inline]
+    fn neighbour(self, xyz: [i32; 3], axis: usize, du: i32, dv: i32) -> usize {
+        let n = self.0 as i32;
+        let (i, j) = PLANE_AXES[axis];
+        let mut q = xyz;
+        q[i] = (q[i] + du).rem_euclid(n);
+        q[j] = (q[j] + dv).rem_euclid(n);
+        ((q[2] * n + q[1]) * n + q[0]) as usize
+    }
+
+    /// Voxel `v`'s in-plane coordinates in the plane across `axis`.
+    #[inline]
+    fn plane_uv(self, v: usize, axis: usize) -> (i32, i32) {
+        let p = self.xyz(v);
+        let (i, j) = PLANE_AXES[axis];
+        (p[i], p[j])
+    }
+
+    /// The voxels of each of the k^3 interleaved classes, k = r + 1: no two
+    /// voxels of a class share a neighbourhood, so a class can be visited
+    /// at once. Classes in a seeded random order.
+    fn classes(self, k: usize, seed: u64, key: [u64; 2]) -> Vec<Vec<usize>> {
+        let n = self.0;
+        rng::permutation(seed, &[key[0], key[1], 3], k * k * k)
+            .into_iter()
+            .map(|class| {
+                let (cx, cy, cz) = (class % k, class / k % k, class / (k * k));
+                (cz..n)
+                    .step_by(k)
+                    .flat_map(|z| {
+                        (cy..n)
+                            .step_by(k)
+                            .flat_map(move |y| (cx..n).step_by(k).map(move |x| (z * n + y) * n + x))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// What the neighbourhood cost reads of the block.
+struct View<'a> {
+    grid: Grid,
+    /// Colour per voxel as seen in this plane.
+    colour: &'a [[u8; 3]],
+    /// FNPTS's iteration counts n_i (`None`: every voxel counts once).
+    iters: Option<&'a [u8]>,
+    /// Cost of an undefined exemplar pixel: the largest pixel cost x M.
+    missing: i64,
+}
+
+/// The block's neighbourhood of voxel `xyz` in the plane across `axis`,
+/// in window order: each neighbour's colour and weight n_i. Gathered once
+/// per voxel, then compared against every candidate.
+fn gather(view: &View, axis: usize, xyz: [i32; 3], window: &[(i32, i32)]) -> Vec<([u8; 3], i64)> {
+    window
+        .iter()
+        .map(|&(du, dv)| {
+            let q = view.grid.neighbour(xyz, axis, du, dv);
+            (view.colour[q], view.iters.map_or(1, |it| it[q] as i64))
+        })
+        .collect()
+}
+
+/// The cost of exemplar `e`'s neighbourhood at (sx, sy) against a gathered
+/// block neighbourhood, added to `cost`; stops once it reaches `limit`.
+/// The paper's cost (seed 004, 3.2): sum of |s_i - r_i| * n_i over the
+/// window, `missing` (the largest) where the exemplar pixel is undefined.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn plane_cost(
+    src: &Sources,
+    e: &Exemplar,
+    block: &[([u8; 3], i64)],
+    (sx, sy): (i32, i32),
+    window: &[(i32, i32)],
+    missing: i64,
+    mut cost: i64,
+    limit: i64,
+) -> i64 {
+    for (&(du, dv), &(b, n)) in window.iter().zip(block) {
+        match src.usable(sx + du, sy + dv) {
+            None => cost += missing,
+            Some(_) if n == 0 => {}
+            Some(s) => {
+                let a = e.pixels[s as usize];
+                let d = (a[0] as i64 - b[0] as i64).abs()
+                    + (a[1] as i64 - b[1] as i64).abs()
+                    + (a[2] as i64 - b[2] as i64).abs();
+                cost += d * n;
+            }
+        }
+        if cost >= limit {
+            break;
+        }
+    }
+    cost
+}
+
+/// Offer coordinate (sx, sy) if usable and new.
+#[inline]
+fn offer(src: &Sources, out: &mut Vec<u32>, sx: i32, sy: i32) {
+    if let Some(i) = src.usable(sx, sy)
+        && !out.contains(&i)
+    {
+        out.push(i);
+    }
+}
+
+/// Candidates from voxel `v`'s ring in the plane across `axis`:
+/// coherence (each defined neighbour's coordinate shifted back by its
+/// offset) and, from the four axis neighbours, a random exemplar pixel
+/// whose neighbour at that offset has the neighbour's colour.
+#[allow(clippy::too_many_arguments)]
+fn plane_candidates(
+    src: &Sources,
+    view: &View,
+    axis: usize,
+    v: usize,
+    coord: &[u32],
+    seed: u64,
+    key: [u64; 2],
+    out: &mut Vec<u32>,
+) {
+    let xyz = view.grid.xyz(v);
+    let buckets = &src.buckets[src.of_axis[axis]];
+    for &(du, dv) in &RING {
+        let q = view.grid.neighbour(xyz, axis, du, dv);
+        if view.iters.is_some_and(|it| it[q] == 0) {
+            continue;
+        }
+        let (cx, cy) = src.split(coord[q]);
+        offer(src, out, cx - du, cy - dv);
+        if du == 0 || dv == 0 {
+            let same = buckets.of(view.colour[q]);
+            if !same.is_empty() {
+                let tag = (axis * 16) as u64 + (du + 2 * dv + 8) as u64;
+                let s = same[rng::below(seed, &[key[0], key[1], v as u64, tag], same.len())];
+                let (x, y) = src.split(s);
+                offer(src, out, x - du, y - dv);
+            }
+        }
+    }
+}
+
+/// `count` random usable coordinates.
+fn random_candidates(src: &Sources, seed: u64, key: [u64; 3], count: usize, out: &mut Vec<u32>) {
+    let usable = &src.buckets[0].usable;
+    for k in 0..count {
+        let s = usable[rng::below(
+            seed,
+            &[key[0], key[1], key[2], 100 + k as u64],
+            usable.len(),
+        )];
+        let (x, y) = src.split(s);
+        offer(src, out, x, y);
+    }
+}
+
+/// The synthesis state at one level.
+struct Block<'a> {
+    src: &'a Sources,
+    grid: Grid,
+    /// Exemplar coordinate per voxel: FNPTS one list shared by the planes,
+    /// optimize one per plane.
+    coord: Vec<Vec<u32>>,
+    /// Colour per voxel: FNPTS as seen in each distinct exemplar, optimize
+    /// the one blended colour.
+    colour: Vec<Vec<[u8; 3]>>,
+    /// FNPTS: times each voxel was iterated at this level.
+    iters: Vec<u8>,
+    /// FNPTS: copies of each exemplar coordinate, and the even share.
+    usage: Vec<u32>,
+    share: f64,
+    method: Method,
+}
+
+impl<'a> Block<'a> {
+    /// Coarsest level: random usable coordinates, not yet iterated.
+    fn random(src: &'a Sources, grid: Grid, opts: &BlockOptions) -> Self {
+        let usable = &src.buckets[0].usable;
+        let planes = if opts.method == Method::Fnpts { 1 } else { 3 };
+        let coord = (0..planes as u64)
+            .map(|a| {
+                (0..grid.len())
+                    .map(|v| usable[rng::below(opts.seed, &[u64::MAX, a, v as u64], usable.len())])
+                    .collect()
+            })
+            .collect();
+        Self::with_coords(src, grid, coord, 0, opts.method, None)
+    }
+
+    fn with_coords(
+        src: &'a Sources,
+        grid: Grid,
+        coord: Vec<Vec<u32>>,
+        iterated: u8,
+        method: Method,
+        blended: Option<Vec<[u8; 3]>>,
+    ) -> Self {
+        let colour = match method {
+            Method::Fnpts => src
+                .ex
+                .iter()
+                .map(|e| coord[0].iter().map(|&c| e.pixels[c as usize]).collect())
+                .collect(),
+            // Until the first blend: the mean of what the planes copy.
+            Method::Optimize => vec![blended.unwrap_or_else(|| {
+                (0..grid.len())
+                    .map(|v| {
+                        let mut sum = [0u32; 3];
+                        for (plane, &ex) in coord.iter().zip(&src.of_axis) {
+                            let e = &src.ex[ex];
+                            for (s, &c) in sum.iter_mut().zip(&e.pixels[plane[v] as usize]) {
+                                *s += c as u32;
+                            }
+                        }
+                        sum.map(|s| ((s + 1) / 3) as u8)
+                    })
+                    .collect()
+            })],
+        };
+        let mut usage = vec![0u32; src.ex[0].pixels.len()];
+        for &c in &coord[0] {
+            usage[c as usize] += 1;
+        }
+        let usable = src.buckets[0].usable.len().max(1);
+        Block {
+            src,
+            grid,
+            coord,
+            colour,
+            iters: vec![iterated; grid.len()],
+            usage,
+            share: grid.len() as f64 / usable as f64,
+            method,
+        }
+    }
+
+    /// The next finer level: each coordinate doubled plus the voxel's
+    /// offset within its parent in the plane (for FNPTS's shared
+    /// coordinate, the plane across z), or the first usable child.
+    fn refine(self, src: &'a Sources, grid: Grid) -> Self {
+        let coarse = self.grid;
+        let coarse_w = self.src.width() as u32;
+        let parent = |v: usize| {
+            let [x, y, z] = grid.xyz(v).map(|c| (c / 2) as usize);
+            (z * coarse.0 + y) * coarse.0 + x
+        };
+        let coord: Vec<Vec<u32>> = self
+            .coord
+            .iter()
+            .enumerate()
+            .map(|(a, plane)| {
+                let axis = if self.method == Method::Fnpts { 2 } else { a };
+                (0..grid.len())
+                    .map(|v| {
+                        let c = plane[parent(v)];
+                        let children =
+                            src.ex[0].children((c % coarse_w) as usize, (c / coarse_w) as usize);
+                        let (u, w) = grid.plane_uv(v, axis);
+                        let own = children[(w % 2 * 2 + u % 2) as usize];
+                        let valid = &src.ex[0].valid;
+                        let child = if valid[own] {
+                            own
+                        } else {
+                            children.into_iter().find(|&c| valid[c]).unwrap_or(own)
+                        };
+                        child as u32
+                    })
+                    .collect()
+            })
+            .collect();
+        let blended = (self.method == Method::Optimize)
+            .then(|| (0..grid.len()).map(|v| self.colour[0][parent(v)]).collect());
+        Self::with_coords(src, grid, coord, 1, self.method, blended)
+    }
+
+    fn view(&self, axis: usize, missing: i64, iters: bool) -> View<'_> {
+        let colour = match self.method {
+            Method::Fnpts => &self.colour[self.src.of_axis[axis]],
+            Method::Optimize => &self.colour[0],
+        };
+        View {
+            grid: self.grid,
+            colour,
+            iters: iters.then_some(&self.iters[..]),
+            missing,
+        }
+    }
+
+    /// One FNPTS pass: every voxel visited once, class by class.
+    fn fnpts_pass(&mut self, opts: &BlockOptions, key: [u64; 2]) {
+        let r = (opts.neighbourhood / 2) as i32;
+        let window = window(r);
+        let m = opts.iterations as i64;
+        for class in self.grid.classes(r as usize + 1, opts.seed, key) {
+            let this = &*self;
+            let views: [View; 3] = std::array::from_fn(|a| this.view(a, MAX_PIXEL_COST * m, true));
+            let chosen: Vec<u32> = class
+                .par_iter()
+                .map(|&v| this.best_shared(v, &views, &window, opts, key))
+                .collect();
+            for (&v, &c) in class.iter().zip(&chosen) {
+                self.usage[self.coord[0][v] as usize] -= 1;
+                self.usage[c as usize] += 1;
+                self.coord[0][v] = c;
+                for (colour, e) in self.colour.iter_mut().zip(&self.src.ex) {
+                    colour[v] = e.pixels[c as usize];
+                }
+                self.iters[v] = self.iters[v].saturating_add(1).min(opts.iterations as u8);
+            }
+        }
+    }
+
+    /// FNPTS: the coordinate whose three plane neighbourhoods cost least
+    /// in sum, plus the occurrence cost.
+    fn best_shared(
+        &self,
+        v: usize,
+        views: &[View; 3],
+        window: &[(i32, i32)],
+        opts: &BlockOptions,
+        key: [u64; 2],
+    ) -> u32 {
+        let src = self.src;
+        let mut candidates = Vec::with_capacity(48);
+        if self.iters[v] > 0 {
+            candidates.push(self.coord[0][v]);
+        }
+        for (a, view) in views.iter().enumerate() {
+            plane_candidates(
+                src,
+                view,
+                a,
+                v,
+                &self.coord[0],
+                opts.seed,
+                key,
+                &mut candidates,
+            );
+        }
+        random_candidates(
+            src,
+            opts.seed,
+            [key[0], key[1], v as u64],
+            RANDOM_CANDIDATES,
+            &mut candidates,
+        );
+        let xyz = self.grid.xyz(v);
+        let blocks: [_; 3] = std::array::from_fn(|a| gather(&views[a], a, xyz, window));
+        let m = opts.iterations as i64;
+        let mut best = (i64::MAX, candidates[0]);
+        for &c in &candidates {
+            // Copies of this coordinate beyond its even share, not counting
+            // this voxel's own.
+            let own = (self.coord[0][v] == c) as u32 as f64;
+            let over =
+                (self.usage[c as usize] as f64 - own - self.share).max(0.0) / self.share.max(1.0);
+            let mut cost = (opts.occurrence * over * (MAX_PIXEL_COST * m) as f64) as i64;
+            let s = src.split(c);
+            for (a, view) in views.iter().enumerate() {
+                let e = &src.ex[src.of_axis[a]];
+                cost = plane_cost(src, e, &blocks[a], s, window, view.missing, cost, best.0);
+                if cost >= best.0 {
+                    break;
+                }
+            }
+            if cost < best.0 {
+                best = (cost, c);
+            }
+        }
+        best.1
+    }
+
+    /// One round of the optimisation method: search, then blend.
+    fn optimize_round(&mut self, opts: &BlockOptions, key: [u64; 2]) {
+        let r = (opts.neighbourhood / 2) as i32;
+        let window = window(r);
+        // Search: per plane, the best coordinate and its distance.
+        let found: Vec<Vec<(u32, f32)>> = (0..3)
+            .map(|a| {
+                let view = self.view(a, MAX_PIXEL_COST, false);
+                let e = &self.src.ex[self.src.of_axis[a]];
+                (0..self.grid.len())
+                    .into_par_iter()
+                    .map(|v| self.best_in_plane(a, v, e, &view, &window, opts, key))
+                    .collect()
+            })
+            .collect();
+        for (a, plane) in found.iter().enumerate() {
+            for (c, &(s, _)) in self.coord[a].iter_mut().zip(plane) {
+                *c = s;
+            }
+        }
+        let pixels = (window.len() * 3) as f32;
+        let weight: Vec<Vec<f32>> = found
+            .iter()
+            .map(|plane| {
+                plane
+                    .iter()
+                    .map(|&(_, d)| (d / pixels + 1.0).powf(-1.2))
+                    .collect()
+            })
+            .collect();
+        // Blend, class by class, histograms updated between classes.
+        let target = self.exemplar_histogram();
+        let mut hist = histogram(&self.colour[0]);
+        let total = self.grid.len() as f32;
+        for class in self.grid.classes(r as usize + 1, opts.seed, key) {
+            let this = &*self;
+            let excess = |c: [u8; 3]| -> f32 {
+                (0..3)
+                    .map(|j| {
+                        let b = c[j] as usize * BINS / 256;
+                        (hist[j][b] as f32 / total - target[j][b]).max(0.0) * BINS as f32
+                    })
+                    .sum()
+            };
+            let blended: Vec<[u8; 3]> = class
+                .par_iter()
+                .map(|&v| this.blend(v, &weight, &window, &excess))
+                .collect();
+            for (&v, &c) in class.iter().zip(&blended) {
+                let old = self.colour[0][v];
+                for j in 0..3 {
+                    hist[j][old[j] as usize * BINS / 256] -= 1;
+                    hist[j][c[j] as usize * BINS / 256] += 1;
+                }
+                self.colour[0][v] = c;
+            }
+        }
+    }
+
+    /// Search phase for one voxel and plane: the candidate exemplar
+    /// neighbourhood nearest the block's, and its distance.
+    #[allow(clippy::too_many_arguments)]
+    fn best_in_plane(
+        &self,
+        a: usize,
+        v: usize,
+        e: &Exemplar,
+        view: &View,
+        window: &[(i32, i32)],
+        opts: &BlockOptions,
+        key: [u64; 2],
+    ) -> (u32, f32) {
+        let src = self.src;
+        let mut candidates = vec![self.coord[a][v]];
+        plane_candidates(
+            src,
+            view,
+            a,
+            v,
+            &self.coord[a],
+            opts.seed,
+            key,
+            &mut candidates,
+        );
+        random_candidates(
+            src,
+            opts.seed,
+            [key[0], key[1], (v * 3 + a) as u64],
+            RANDOM_CANDIDATES,
+            &mut candidates,
+        );
+        let block = gather(view, a, self.grid.xyz(v), window);
+        let mut best = (i64::MAX, candidates[0]);
+        for &c in &candidates {
+            let cost = plane_cost(
+                src,
+                e,
+                &block,
+                src.split(c),
+                window,
+                view.missing,
+                0,
+                best.0,
+            );
+            if cost < best.0 {
+                best = (cost, c);
+            }
+        }
+        (best.1, best.0 as f32)
+    }
+
+    /// Optimisation phase for one voxel (seed 002, Figure 4.5): the blend of
+    /// E_a[P_a[u] + v - u] over the plane neighbours u, weighted by
+    /// distance^-1.2 / (1 + histogram excess).
+    fn blend(
+        &self,
+        v: usize,
+        weight: &[Vec<f32>],
+        window: &[(i32, i32)],
+        excess: &dyn Fn([u8; 3]) -> f32,
+    ) -> [u8; 3] {
+        let src = self.src;
+        let xyz = self.grid.xyz(v);
+        let (mut acc, mut total) = ([0f32; 3], 0f32);
+        for (a, weight) in weight.iter().enumerate() {
+            let e = &src.ex[src.of_axis[a]];
+            for &(du, dv) in window {
+                // u = v + (du, dv); v sits at -(du, dv) in u's neighbourhood.
+                let u = self.grid.neighbour(xyz, a, du, dv);
+                let (sx, sy) = src.split(self.coord[a][u]);
+                let Some(s) = src.usable(sx - du, sy - dv) else {
+                    continue;
+                };
+                let c = e.pixels[s as usize];
+                let w = weight[u] / (1.0 + excess(c));
+                for k in 0..3 {
+                    acc[k] += w * c[k] as f32;
+                }
+                total += w;
+            }
+        }
+        if total == 0.0 {
+            return self.colour[0][v];
+        }
+        acc.map(|x| (x / total).round().clamp(0.0, 255.0) as u8)
+    }
+
+    /// Per channel, the fraction of usable exemplar pixels in each bin,
+    /// over the exemplars of the three planes.
+    fn exemplar_histogram(&self) -> [[f32; BINS]; 3] {
+        let mut h = [[0f32; BINS]; 3];
+        let usable = &self.src.buckets[0].usable;
+        for a in 0..3 {
+            let e = &self.src.ex[self.src.of_axis[a]];
+            for &i in usable {
+                for (j, &c) in e.pixels[i as usize].iter().enumerate() {
+                    h[j][c as usize * BINS / 256] += 1.0;
+                }
+            }
+        }
+        let n = (3 * usable.len()) as f32;
+        h.map(|ch| ch.map(|x| x / n))
+    }
+
+    fn volume(&self) -> Volume {
+        let n = self.grid.0;
+        let voxels = match self.method {
+            Method::Fnpts => self.coord[0]
+                .iter()
+                .map(|&c| self.src.mean_colour(c))
+                .collect(),
+            Method::Optimize => self.colour[0].clone(),
+        };
+        Volume {
+            size: [n; 3],
+            spacing: 1.0,
+            voxels,
+        }
+    }
+}
+
+/// Per channel, voxel counts in each bin.
+fn histogram(colour: &[[u8; 3]]) -> [[u32; BINS]; 3] {
+    let mut h = [[0u32; BINS]; 3];
+    for c in colour {
+        for j in 0..3 {
+            h[j][c[j] as usize * BINS / 256] += 1;
+        }
+    }
+    h
+}

@@ -140,7 +140,10 @@ impl Volume {
             }
             let Some((key, value)) = line.split_once(':') else {
                 // Key/value pairs (`key:=value`) carry no layout.
-                return Err(format!("header line {}: '{line}' is not 'field: value'", n + 1));
+                return Err(format!(
+                    "header line {}: '{line}' is not 'field: value'",
+                    n + 1
+                ));
             };
             if value.starts_with('=') {
                 continue;

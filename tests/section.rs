@@ -3,7 +3,8 @@
 //! left out), and is coloured as the block samples.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use glam::DVec3;
 use organtex::mesh::shapes::torus;
@@ -397,4 +398,61 @@ fn the_wgsl_snippet_validates_and_matches_the_uniform() {
              return vec4<f32>(block_colour(p), 1.0);\n\
          }}\n"
     ));
+}
+
+fn organtex(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(args)
+        .output()
+        .expect("run organtex");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_cli_writes_a_png_and_a_glb() {
+    let dir = tempfile::tempdir().unwrap();
+    let nrrd = dir.path().join("block.nrrd");
+    block([16, 16, 16]).write_nrrd(&nrrd).unwrap();
+    let bunny = data("bunny.obj");
+    for (name, size) in [("cut.png", "300"), ("cut.glb", "256")] {
+        let out: PathBuf = dir.path().join(name);
+        let (ok, stdout, stderr) = organtex(&[
+            "section",
+            bunny.to_str().unwrap(),
+            "--block",
+            nrrd.to_str().unwrap(),
+            "--plane",
+            "0.3,0.2,1,0.5",
+            "--scale",
+            "0.002",
+            "--origin",
+            "-0.1,0,0.02",
+            "--resolution",
+            size,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{stderr}");
+        assert!(stdout.contains("boundary loops"), "{stdout}");
+        check_output(&out);
+    }
+}
+
+fn check_output(out: &Path) {
+    let bytes = std::fs::read(out).unwrap();
+    if out.extension().unwrap() == "png" {
+        let img = image::load_from_memory(&bytes).unwrap().to_rgba8();
+        assert_eq!(img.width().max(img.height()), 300);
+        assert!(img.pixels().any(|p| p[3] == 255) && img.pixels().any(|p| p[3] == 0));
+    } else {
+        assert_eq!(&bytes[0..4], b"glTF");
+        assert_eq!(
+            u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize,
+            bytes.len()
+        );
+    }
 }

@@ -14,9 +14,11 @@ use crate::mesh::curvature::Curvature;
 use crate::mesh::{Components, Topology, io};
 use crate::progress::Silent;
 use crate::scene::bake::{BakeOptions, bake};
+use crate::solid::{Placement, Plane, plane_section, sample_colours};
 use crate::synth::block::{BlockOptions, synthesize_block};
 use crate::synth::exemplar::{Crop, Exemplar};
 use crate::synth::fnpts::{SynthOptions, synthesize};
+use crate::synth::volume::Volume;
 use crate::unwrap::{UnwrapOptions, unwrap};
 
 /// The timed step of a workload.
@@ -111,6 +113,11 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "section bunny",
+            what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
+            prepare: section_step,
+        },
+        Workload {
             name: "synth 128->256",
             what: "FNPTS, tileable, from a 128x128 gravel crop (target: half Embark's time)",
             prepare: |root| synth_step(root, 128, 256),
@@ -186,6 +193,35 @@ fn synth3d_step(root: &Path, side: usize) -> Result<Step> {
     };
     Ok(Box::new(move || {
         synthesize_block(std::slice::from_ref(&exemplar), &opts, &Silent).map(drop)
+    }))
+}
+
+/// Cut the bunny through the middle of its bounds and colour the
+/// section's vertices from a 64³ block of random voxels spanning it.
+fn section_step(root: &Path) -> Result<Step> {
+    let mesh = io::read(&bunny(root))?;
+    let topo = Topology::build(&mesh)?;
+    let (lo, hi) = mesh
+        .bounding_box()
+        .ok_or_else(|| crate::Error::invalid("bunny.obj has no vertices"))?;
+    let normal = glam::DVec3::new(0.3, 0.2, 1.0);
+    let plane = Plane::new(normal, normal.dot((lo + hi) / 2.0))?;
+    let n = 64;
+    let volume = Volume {
+        size: [n; 3],
+        spacing: 1.0,
+        voxels: (0..n * n * n)
+            .map(|i| {
+                let h = crate::rng::hash(0, &[i as u64]).to_le_bytes();
+                [h[0], h[1], h[2]]
+            })
+            .collect(),
+    };
+    let placement = Placement::new(lo, (hi - lo).max_element() / n as f64)?;
+    Ok(Box::new(move || {
+        let section = plane_section(&mesh, &topo, plane)?;
+        std::hint::black_box(sample_colours(&section, &volume, &placement));
+        Ok(())
     }))
 }
 

@@ -15,6 +15,7 @@ pub mod progress;
 pub mod raster;
 pub mod rng;
 pub mod scene;
+pub mod solid;
 pub mod synth;
 pub mod unwrap;
 

@@ -573,3 +573,87 @@ fn an_interrupted_bake_leaves_no_file_behind() {
         .collect();
     assert_eq!(left, ["keep.txt"]);
 }
+
+#[test]
+fn section_refuses_bad_input_clearly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let (cube, holed) = (data.join("cube.obj"), data.join("bunny10k_textured.obj"));
+    let block = organtex::synth::volume::Volume {
+        size: [2, 2, 2],
+        spacing: 0.25,
+        voxels: vec![[200, 40, 60]; 8],
+    };
+    block.write_nrrd(&d("block.nrrd")).unwrap();
+    let mut bytes = block.to_nrrd();
+    bytes.truncate(bytes.len() - 5);
+    std::fs::write(d("short.nrrd"), bytes).unwrap();
+    let out = d("cut.png");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let run = |mesh: &Path, nrrd: &Path, plane: &str, out: &Path| {
+        vec![
+            "section".to_string(),
+            s(mesh),
+            "--block".into(),
+            s(nrrd),
+            "--plane".into(),
+            plane.into(),
+            "-o".into(),
+            s(out),
+        ]
+    };
+    let cases: Vec<(&str, PathBuf, &str, Vec<String>)> = vec![
+        (
+            "missing block",
+            d("nowhere.nrrd"),
+            "No such file",
+            run(&cube, &d("nowhere.nrrd"), "0,0,1,0", &out),
+        ),
+        (
+            "truncated block",
+            d("short.nrrd"),
+            "19 bytes of voxel data where sizes [2, 2, 2] need 24",
+            run(&cube, &d("short.nrrd"), "0,0,1,0", &out),
+        ),
+        (
+            "open mesh",
+            holed.clone(),
+            "the mesh is not closed (5 boundary loops); a section needs a closed organ",
+            run(&holed, &d("block.nrrd"), "0,0,1,0", &out),
+        ),
+        (
+            "plane missing the mesh",
+            cube.clone(),
+            "the plane misses the mesh: the section is empty, nothing written",
+            run(&cube, &d("block.nrrd"), "0,0,1,-3", &out),
+        ),
+        (
+            "unknown output format",
+            d("cut.jpg"),
+            "unknown output format (organtex section writes .png or .glb)",
+            run(&cube, &d("block.nrrd"), "0,0,1,0", &d("cut.jpg")),
+        ),
+    ];
+    for (name, file, expect, args) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        check_refused(name, &file, expect, &args);
+    }
+    for (plane, expect) in [
+        ("0,0,0,1", "the plane needs a non-zero finite normal"),
+        ("0,0,1", "is not NX,NY,NZ,D"),
+        ("0,nan,1,0", "is not NX,NY,NZ,D"),
+    ] {
+        let args = run(&cube, &d("block.nrrd"), plane, &out);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (ok, _, stderr) = organtex(&args);
+        assert!(!ok && stderr.contains(expect), "{plane}: {stderr}");
+        assert!(!stderr.contains("panicked"));
+    }
+    let mut args = run(&cube, &d("block.nrrd"), "0,0,1,0", &out);
+    args.extend(["--scale".into(), "-1".into()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (ok, _, stderr) = organtex(&args);
+    assert!(!ok && stderr.contains("positive scale"), "{stderr}");
+    assert!(!out.exists() && !d("cut.jpg").exists(), "no output written");
+}

@@ -6,6 +6,7 @@ mod db;
 mod generate;
 mod info;
 pub mod progress;
+mod section;
 mod synth;
 mod synth3d;
 mod unwrap;
@@ -58,6 +59,11 @@ enum Command {
     Db(db::Args),
     /// Write a generated test shape (torus, double torus, cylinder, sphere).
     Generate(generate::Args),
+    /// Cut a closed mesh with a plane and texture the section from a solid
+    /// texture block (NRRD): a .png of the section in its plane, or a .glb
+    /// of its triangles. A plane that misses the mesh is an error (exit
+    /// status 1) and writes nothing.
+    Section(section::Args),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -71,6 +77,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Synth(args)) => synth::run(args),
         Some(Command::Synth3d(args)) => synth3d::run(args),
         Some(Command::Db(args)) => db::run(args),
+        Some(Command::Section(args)) => section::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {
             let root = organtex::bench::default_root();

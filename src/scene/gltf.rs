@@ -41,6 +41,25 @@ struct Builder {
 }
 
 impl Builder {
+    fn new() -> Builder {
+        Builder {
+            root: json::Root {
+                asset: json::Asset {
+                    generator: Some(format!("organtex {}", env!("CARGO_PKG_VERSION"))),
+                    version: "2.0".into(),
+                    copyright: None,
+                    extensions: None,
+                    extras: Default::default(),
+                    min_version: None,
+                },
+                ..Default::default()
+            },
+            bin: Vec::new(),
+            textures: HashMap::new(),
+            samplers: HashMap::new(),
+        }
+    }
+
     fn view(
         &mut self,
         bytes: &[u8],
@@ -463,22 +482,7 @@ fn repeating_png(path: &Path) -> Result<Vec<u8>> {
 /// The .glb bytes of `scene`; with `atlases` (per node, per facet), in
 /// atlas mode.
 pub fn encode(scene: &BakedScene, atlases: Option<&[Vec<Atlas>]>) -> Result<Vec<u8>> {
-    let mut b = Builder {
-        root: json::Root {
-            asset: json::Asset {
-                generator: Some(format!("organtex {}", env!("CARGO_PKG_VERSION"))),
-                version: "2.0".into(),
-                copyright: None,
-                extensions: None,
-                extras: Default::default(),
-                min_version: None,
-            },
-            ..Default::default()
-        },
-        bin: Vec::new(),
-        textures: HashMap::new(),
-        samplers: HashMap::new(),
-    };
+    let mut b = Builder::new();
     let mut scene_nodes = Vec::new();
     for (k, node) in scene.nodes.iter().enumerate() {
         for (j, facet) in node.facets.iter().enumerate() {
@@ -697,4 +701,52 @@ fn atlas_primitives(
         }
     }
     Ok(own.primitive(b, m).into_iter().collect())
+}
+
+/// The .glb bytes of one opaque mesh named `name`, textured with `texture`
+/// (clamped at its edges): per vertex a position, a normal and a uv, and
+/// the triangles indexing them. For cut surfaces (`solid::cut`).
+pub fn textured_mesh(
+    name: &str,
+    positions: &[DVec3],
+    normals: &[DVec3],
+    uvs: &[DVec2],
+    triangles: &[[u32; 3]],
+    texture: &image::DynamicImage,
+) -> Result<Vec<u8>> {
+    let mut b = Builder::new();
+    let tex = b.texture(name, "clamp", || png_bytes(texture))?;
+    let m = b.root.push(material(
+        name.to_string(),
+        info(tex, None),
+        [1.0; 4],
+        None,
+        false,
+    ));
+    let mut stream = Stream::default();
+    for ((&p, &n), &uv) in positions.iter().zip(normals).zip(uvs) {
+        stream.vertex(p, n, uv, None);
+    }
+    stream.indices = triangles.iter().flatten().copied().collect();
+    let primitives = stream.primitive(&mut b, m).into_iter().collect();
+    let mesh = b.root.push(json::Mesh {
+        extensions: None,
+        extras: Default::default(),
+        name: Some(name.to_string()),
+        primitives,
+        weights: None,
+    });
+    let node = b.root.push(json::Node {
+        mesh: Some(mesh),
+        name: Some(name.to_string()),
+        ..Default::default()
+    });
+    let scene = b.root.push(json::Scene {
+        extensions: None,
+        extras: Default::default(),
+        name: Some(name.to_string()),
+        nodes: vec![node],
+    });
+    b.root.scene = Some(scene);
+    b.finish()
 }

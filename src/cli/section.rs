@@ -1,0 +1,117 @@
+//! `organtex section MESH --block B.nrrd --plane NX,NY,NZ,D -o CUT.png|.glb`:
+//! the section of a closed organ by a plane, textured from a solid block.
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+use organtex::mesh::{Topology, io};
+use organtex::solid::{Placement, Plane, plane_section, render_section, section_glb};
+use organtex::synth::volume::Volume;
+use organtex::{Error, Result};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Closed mesh to cut (.obj, .ply or .stl).
+    mesh: PathBuf,
+    /// The solid texture: an RGB uint8 NRRD volume, tiled through space.
+    #[arg(long, value_name = "NRRD")]
+    block: PathBuf,
+    /// The cutting plane: the points p with N·p = D. The normal need not be
+    /// unit; the section faces along it.
+    #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
+    plane: Plane,
+    /// Object units one voxel spans (default: the block's NRRD spacing).
+    #[arg(long, allow_negative_numbers = true)]
+    scale: Option<f64>,
+    /// Where the block's corner (voxel 0's low corner) sits in object space.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true,
+          default_value = "0,0,0")]
+    origin: DVec3,
+    /// Pixels along the longer side of the section image.
+    #[arg(long, value_name = "PX", default_value_t = 1024,
+          value_parser = clap::value_parser!(u32).range(1..=16384))]
+    resolution: u32,
+    /// Output: .png (the section drawn in its plane, transparent outside
+    /// it) or .glb (the section's triangles, textured with that image).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+fn numbers(s: &str, n: usize, what: &str) -> std::result::Result<Vec<f64>, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not {what}"))?;
+    if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("'{s}' is not {what}"));
+    }
+    Ok(v)
+}
+
+fn parse_plane(s: &str) -> std::result::Result<Plane, String> {
+    let v = numbers(s, 4, "NX,NY,NZ,D (four finite numbers)")?;
+    Plane::new(DVec3::new(v[0], v[1], v[2]), v[3]).map_err(|e| e.to_string())
+}
+
+fn parse_point(s: &str) -> std::result::Result<DVec3, String> {
+    let v = numbers(s, 3, "X,Y,Z (three finite numbers)")?;
+    Ok(DVec3::new(v[0], v[1], v[2]))
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let extension = args
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase());
+    let glb = match extension.as_deref() {
+        Some("png") => false,
+        Some("glb") => true,
+        _ => {
+            return Err(Error::invalid(
+                "unknown output format (organtex section writes .png or .glb)",
+            )
+            .in_file(&args.output));
+        }
+    };
+    let mesh = io::read(&args.mesh)?;
+    let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
+    let volume = Volume::read_nrrd(&args.block)?;
+    let placement = Placement::new(args.origin, args.scale.unwrap_or(volume.spacing))?;
+
+    let start = std::time::Instant::now();
+    let section = plane_section(&mesh, &topology, args.plane).map_err(|e| e.in_file(&args.mesh))?;
+    let extent = section
+        .bounds()
+        .map_or(0.0, |(lo, hi)| (hi - lo).max_element());
+    if section.is_empty() || extent <= 0.0 {
+        return Err(Error::invalid(
+            "the plane misses the mesh: the section is empty, nothing written",
+        )
+        .in_file(&args.mesh));
+    }
+    let image = render_section(
+        &section,
+        &volume,
+        &placement,
+        args.resolution as f64 / extent,
+    )?;
+    if glb {
+        let bytes = section_glb(&section, &image)?;
+        organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;
+    } else {
+        let png = image::DynamicImage::ImageRgba8(image.image.clone());
+        organtex::atomic::write_png(&args.output, &png)?;
+    }
+    println!(
+        "{}: section of {} boundary loops, {} triangles, area {:.6}, {}x{} pixels, in {:.2} s",
+        args.output.display(),
+        section.boundary.len(),
+        section.triangles.len(),
+        section.area(),
+        image.image.width(),
+        image.image.height(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

@@ -137,6 +137,32 @@ def main():
         print(f"  trimesh loaded {count} primitives; baked in {report['timings']['total_s']:.1f} s")
         check_figures(name, report, failures)
 
+    # A cut surface from `organtex section`: a small block, an oblique plane
+    # through the bunny; trimesh must load it textured too.
+    print("\n== section bunny", flush=True)
+    cut = out / "section"
+    cut.mkdir(parents=True, exist_ok=True)
+    block = cut / "block.nrrd"
+    steps = [
+        [args.organtex, "synth3d", str(ROOT / "database" / "sources" / "ihc.png"), "--crop", "0,0,64,64", "--size", "32", "-o", str(block)],
+        [args.organtex, "section", str(ROOT / "tests" / "data" / "bunny.obj"), "--block", str(block), "--plane", "0.3,0.2,1,0.35", "--scale", "0.004", "--resolution", "256", "-o", str(cut / "cut.glb")],
+    ]
+    for step in steps:
+        run = subprocess.run(step, capture_output=True, text=True)
+        if run.returncode != 0:
+            failures.append(f"section: {step[1]} failed: {run.stderr.strip()}")
+            break
+    else:
+        import trimesh
+
+        scene = trimesh.load(str(cut / "cut.glb"), force="scene", process=False)
+        geometry = list(scene.geometry.values())
+        if len(geometry) != 1 or geometry[0].visual.uv is None or len(geometry[0].faces) == 0:
+            failures.append("section: cut.glb is not one textured mesh with uvs")
+        else:
+            print(f"  trimesh loaded {len(geometry[0].faces)} textured triangles")
+        glbs.append(cut / "cut.glb")
+
     print("\n== glTF validator", flush=True)
     validator = subprocess.run(["node", str(ROOT / "tools" / "validate_gltf.js"), *map(str, glbs)], env={"GLTF_VALIDATOR_DIR": str(VALIDATOR / "node_modules" / "gltf-validator"), "PATH": shutil.os.environ.get("PATH", "")})
     if validator.returncode != 0:

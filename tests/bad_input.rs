@@ -2,6 +2,8 @@
 //! message naming the file and what is wrong, never panic, and leave no
 //! output behind.
 
+mod common;
+use common::organtex;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -165,18 +167,6 @@ fn cases() -> Vec<Case> {
             "unknown mesh format '.xyz' (organtex reads .obj, .ply, .stl)",
         ),
     ]
-}
-
-fn organtex(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_organtex"))
-        .args(args)
-        .output()
-        .expect("run organtex");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 fn check_refused(name: &str, path: &Path, expect: &str, args: &[&str]) {

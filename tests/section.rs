@@ -2,9 +2,10 @@
 //! section is closed, lies on the mesh, is triangulated exactly (holes
 //! left out), and is coloured as the block samples.
 
+mod common;
+use common::organtex;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use glam::DVec3;
 use organtex::mesh::shapes::torus;
@@ -398,18 +399,6 @@ fn the_wgsl_snippet_validates_and_matches_the_uniform() {
              return vec4<f32>(block_colour(p), 1.0);\n\
          }}\n"
     ));
-}
-
-fn organtex(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_organtex"))
-        .args(args)
-        .output()
-        .expect("run organtex");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 #[test]

@@ -102,3 +102,17 @@ pub fn thousands(n: usize) -> String {
     }
     out
 }
+
+/// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
+/// naming the form expected.
+fn comma_numbers<T: std::str::FromStr>(
+    s: &str,
+    n: usize,
+    what: &str,
+) -> std::result::Result<Vec<T>, String> {
+    s.split(',')
+        .map(|p| p.trim().parse::<T>().ok())
+        .collect::<Option<Vec<T>>>()
+        .filter(|v| v.len() == n)
+        .ok_or_else(|| format!("'{s}' is not {what}"))
+}

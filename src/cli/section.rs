@@ -37,16 +37,16 @@ pub struct Args {
     output: PathBuf,
 }
 
+/// `n` finite comma-separated numbers.
 fn numbers(s: &str, n: usize, what: &str) -> std::result::Result<Vec<f64>, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("'{s}' is not {what}"))?;
-    if v.len() != n || v.iter().any(|x| !x.is_finite()) {
-        return Err(format!("'{s}' is not {what}"));
-    }
-    Ok(v)
+    super::comma_numbers::<f64>(s, n, what)?
+        .into_iter()
+        .map(|x| {
+            x.is_finite()
+                .then_some(x)
+                .ok_or(format!("'{s}' is not {what}"))
+        })
+        .collect()
 }
 
 fn parse_plane(s: &str) -> std::result::Result<Plane, String> {

@@ -65,20 +65,13 @@ fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
 }
 
 pub(super) fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
-    let v: Vec<u32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<u32>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("'{s}' is not X,Y,WIDTH,HEIGHT"))?;
-    match v.as_slice() {
-        [x, y, width, height] => Ok(Crop {
-            x: *x,
-            y: *y,
-            width: *width,
-            height: *height,
-        }),
-        _ => Err(format!("'{s}' is not X,Y,WIDTH,HEIGHT")),
-    }
+    let v = super::comma_numbers::<u32>(s, 4, "X,Y,WIDTH,HEIGHT")?;
+    Ok(Crop {
+        x: v[0],
+        y: v[1],
+        width: v[2],
+        height: v[3],
+    })
 }
 
 pub fn run(args: Args) -> Result<()> {

@@ -34,7 +34,7 @@ mod optimize;
 use rayon::prelude::*;
 
 use super::exemplar::Exemplar;
-use super::fnpts::{ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, window};
+use super::fnpts::{ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, check_search, window};
 use super::volume::Volume;
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
@@ -135,23 +135,7 @@ fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
         )));
     }
     let k = opts.neighbourhood;
-    if k.is_multiple_of(2) || !(3..=11).contains(&k) {
-        return Err(Error::invalid(format!(
-            "the neighbourhood must be odd, from 3 to 11, not {k}"
-        )));
-    }
-    if !(1..=16).contains(&opts.iterations) {
-        return Err(Error::invalid(format!(
-            "iterations must be from 1 to 16, not {}",
-            opts.iterations
-        )));
-    }
-    if !(0.0..=10.0).contains(&opts.occurrence) {
-        return Err(Error::invalid(format!(
-            "the occurrence weight must be from 0 to 10, not {}",
-            opts.occurrence
-        )));
-    }
+    check_search(k, 11, opts.iterations, opts.occurrence)?;
     let n = opts.size;
     // 256^3 voxels take about 200 MB of synthesis state (optimize: 0.9 GB).
     if !(k..=256).contains(&n) {
@@ -511,9 +495,12 @@ impl<'a> Block<'a> {
                     .collect()
             })],
         };
+        // Occurrence is FNPTS's alone.
         let mut usage = vec![0u32; src.ex[0].pixels.len()];
-        for &c in &coord[0] {
-            usage[c as usize] += 1;
+        if method == Method::Fnpts {
+            for &c in &coord[0] {
+                usage[c as usize] += 1;
+            }
         }
         let usable = src.buckets[0].usable.len().max(1);
         Block {

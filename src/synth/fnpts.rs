@@ -207,26 +207,35 @@ fn check_options(opts: &SynthOptions) -> Result<()> {
             opts.width, opts.height
         )));
     }
-    if opts.neighbourhood.is_multiple_of(2) || !(3..=15).contains(&opts.neighbourhood) {
-        return Err(Error::invalid(format!(
-            "the neighbourhood must be odd, from 3 to 15, not {}",
-            opts.neighbourhood
-        )));
-    }
-    if !(1..=16).contains(&opts.iterations) {
-        return Err(Error::invalid(format!(
-            "iterations must be from 1 to 16, not {}",
-            opts.iterations
-        )));
-    }
-    if !(0.0..=10.0).contains(&opts.occurrence) {
-        return Err(Error::invalid(format!(
-            "the occurrence weight must be from 0 to 10, not {}",
-            opts.occurrence
-        )));
-    }
+    check_search(opts.neighbourhood, 15, opts.iterations, opts.occurrence)?;
     if opts.levels == Some(0) {
         return Err(Error::invalid("levels must be at least 1"));
+    }
+    Ok(())
+}
+
+/// The search settings 2D and 3D synthesis share: an odd neighbourhood
+/// side up to `largest`, iterations and the occurrence weight in range.
+pub(super) fn check_search(
+    neighbourhood: usize,
+    largest: usize,
+    iterations: usize,
+    occurrence: f64,
+) -> Result<()> {
+    if neighbourhood.is_multiple_of(2) || !(3..=largest).contains(&neighbourhood) {
+        return Err(Error::invalid(format!(
+            "the neighbourhood must be odd, from 3 to {largest}, not {neighbourhood}"
+        )));
+    }
+    if !(1..=16).contains(&iterations) {
+        return Err(Error::invalid(format!(
+            "iterations must be from 1 to 16, not {iterations}"
+        )));
+    }
+    if !(0.0..=10.0).contains(&occurrence) {
+        return Err(Error::invalid(format!(
+            "the occurrence weight must be from 0 to 10, not {occurrence}"
+        )));
     }
     Ok(())
 }

@@ -118,6 +118,11 @@ pub fn workloads() -> Vec<Workload> {
             prepare: section_step,
         },
         Workload {
+            name: "frame default",
+            what: "the default scene drawn 960x720 after a texture drag step (uniform write, draw, read back), on this machine's GPU adapter",
+            prepare: frame_step,
+        },
+        Workload {
             name: "synth 128->256",
             what: "FNPTS, tileable, from a 128x128 gravel crop (target: half Embark's time)",
             prepare: |root| synth_step(root, 128, 256),
@@ -254,4 +259,40 @@ fn median(sorted: &[f64]) -> f64 {
     } else {
         (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0
     }
+}
+
+/// One frame of the texture-drag path: the bundled scene unwrapped and on
+/// the GPU (untimed); timed: move a texture (one uniform), draw, read the
+/// pixels back (so the GPU's work is inside the time).
+fn frame_step(root: &Path) -> Result<Step> {
+    use crate::render::{Gpu, GpuScene, Layers, Offscreen, Renderer, View};
+    use crate::scene::draw::DrawList;
+    let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
+    let baked = crate::scene::build::build_scene(&spec, false, &Silent)?;
+    let list = DrawList::of(&baked, None);
+    let gpu = Gpu::headless()?;
+    let renderer = Renderer::new(&gpu.device);
+    let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list)?;
+    let target = Offscreen::new(&gpu.device, [960, 720]);
+    let view = View {
+        camera: crate::render::scene_camera(&baked, scene.bounds),
+        layers: Layers::default(),
+        clip: None,
+    };
+    let mut settings = baked.nodes[0].facets[0].settings.clone();
+    Ok(Box::new(move || {
+        settings.offset[0] += 0.01;
+        for (m, material) in list.materials.iter().enumerate() {
+            if material.facet == Some((0, 0)) {
+                scene.set_transform(
+                    &gpu.queue,
+                    &list,
+                    m,
+                    material.transform_for(&settings).as_ref(),
+                );
+            }
+        }
+        target.draw(&renderer, &gpu.device, &gpu.queue, &scene, &view);
+        target.read(&gpu.device, &gpu.queue).map(drop)
+    }))
 }

@@ -4,6 +4,7 @@
 //! project's shared folder): `mesh` is the foundation every other stage
 //! builds on.
 
+pub mod app;
 pub mod atomic;
 pub mod bench;
 pub mod blend;
@@ -13,6 +14,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod progress;
 pub mod raster;
+pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod solid;

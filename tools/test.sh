@@ -26,6 +26,9 @@ rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup com
 rustup component list --installed 2>/dev/null | grep -q '^clippy' || rustup component add clippy
 python3 -c 'import venv, ensurepip' 2>/dev/null || need_apt python3-venv
 command -v npm >/dev/null 2>&1 || need_apt nodejs npm
+# The renderer and viewer tests draw on a software Vulkan driver (llvmpipe);
+# without it they fail, they do not skip.
+need_apt mesa-vulkan-drivers libvulkan1
 
 step "cargo fmt --check"
 cargo fmt --check

@@ -97,5 +97,8 @@ fn print(baked: &Baked) {
     }
     println!("wrote {}", baked.glb.display());
     println!("      {}", baked.report_json.display());
-    println!("      {}", baked.preview.display());
+    match &baked.preview {
+        Some(p) => println!("      {}", p.display()),
+        None => eprintln!("warning: preview.png not written: {}", r.preview_renderer),
+    }
 }

@@ -11,6 +11,7 @@ mod synth;
 mod synth3d;
 mod unwrap;
 mod uv_metrics;
+mod view;
 
 use std::path::Path;
 
@@ -64,6 +65,10 @@ enum Command {
     /// of its triangles. A plane that misses the mesh is an error (exit
     /// status 1) and writes nothing.
     Section(section::Args),
+    /// The desktop viewer: open a scene or mesh, pick tissues, unwrap,
+    /// drag textures into place, cut the organ and see its inside, save
+    /// and bake. Needs a display (or Xvfb).
+    View(view::Args),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -78,6 +83,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Synth3d(args)) => synth3d::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
+        Some(Command::View(args)) => view::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {
             let root = organtex::bench::default_root();

@@ -1,5 +1,5 @@
 //! The bake: a scene file in, DIR/scene.glb, DIR/report.json and
-//! DIR/preview.png out. Everything is computed in memory first and the
+//! DIR/preview.png (drawn by `crate::render`) out. Everything is computed in memory first and the
 //! files are written last, each atomically, so a failed or cancelled bake
 //! leaves DIR as it was.
 //!
@@ -17,7 +17,8 @@ use serde::Serialize;
 use super::atlas::{self, Atlas};
 use super::build::{BakedScene, FacetReport, build_scene};
 use super::contrast::{Colours, Contrast, contrast};
-use super::{file, gltf, preview};
+use super::draw::DrawList;
+use super::{file, gltf};
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
@@ -89,6 +90,8 @@ pub struct BakeReport {
     /// The finest tissue texture's texels per mesh unit (its width over its
     /// tile size): an atlas below it blurs that tissue.
     pub texture_density: f64,
+    /// The GPU adapter that drew preview.png, or why there is none.
+    pub preview_renderer: String,
     pub facets: Vec<FacetLine>,
     pub borders: Vec<BorderLine>,
     pub timings: Timings,
@@ -99,7 +102,8 @@ pub struct BakeReport {
 pub struct Baked {
     pub glb: PathBuf,
     pub report_json: PathBuf,
-    pub preview: PathBuf,
+    /// None when no GPU adapter could draw it.
+    pub preview: Option<PathBuf>,
     pub report: BakeReport,
 }
 
@@ -154,10 +158,25 @@ pub fn bake(
 
     let t = Instant::now();
     progress.stage("writing", 2);
-    let glb = gltf::encode(&baked, blended.as_ref().map(|(b, _)| b.as_slice()))?;
+    let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
+    let glb = gltf::encode_list(&list, &spec.name)?;
     progress.advance(1);
+    // The preview goes through the viewer's renderer; a machine with no
+    // GPU adapter at all (not even a software one) gets the bake without
+    // it, and the report says why.
     let [w, h] = opts.preview;
-    let picture = preview::render(&baked, w, h);
+    let (picture, preview_renderer) = match crate::render::Gpu::headless() {
+        Ok(gpu) => (
+            Some(crate::render::preview(
+                &gpu,
+                &baked,
+                &list,
+                [w as u32, h as u32],
+            )?),
+            gpu.adapter,
+        ),
+        Err(e) => (None, format!("none: {e}")),
+    };
     progress.advance(1);
     check(progress)?;
     let output_s = t.elapsed().as_secs_f64();
@@ -190,6 +209,7 @@ pub fn bake(
         atlas_size: opts.atlas,
         atlas_density: opts.atlas.map(|size| atlas::density(&baked.nodes, size)),
         texture_density: texture_density(&baked),
+        preview_renderer,
         facets,
         borders,
         timings: Timings {
@@ -204,13 +224,15 @@ pub fn bake(
     let baked = Baked {
         glb: out.join("scene.glb"),
         report_json: out.join("report.json"),
-        preview: out.join("preview.png"),
+        preview: picture.as_ref().map(|_| out.join("preview.png")),
         report,
     };
     write_file(&baked.glb, |w| w.write_all(&glb))?;
     let json = serde_json::to_string_pretty(&baked.report).expect("the report serialises");
     write_file(&baked.report_json, |w| writeln!(w, "{json}"))?;
-    write_png(&baked.preview, &image::DynamicImage::ImageRgb8(picture))?;
+    if let (Some(path), Some(picture)) = (&baked.preview, picture) {
+        write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
+    }
     Ok(baked)
 }
 

@@ -107,7 +107,7 @@ pub fn build_scene(
 
 /// Build the database entries the scene uses whose outputs are missing or
 /// out of date (`db::build::is_current`).
-fn ensure_tissues(
+pub fn ensure_tissues(
     spec: &SceneSpec,
     database: &Database,
     progress: &dyn Progress,
@@ -154,7 +154,7 @@ fn ensure_tissues(
 
 /// The node's mesh, read or generated, repaired if needed, with facets; and
 /// its topology.
-fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
+pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
     let mut mesh = match &node.mesh {
         MeshSpec::File(path) => io::read(path)?,
         MeshSpec::UterineCavity(params) => uterus::generate(params).map_err(|e| {
@@ -182,7 +182,7 @@ fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
 
 /// Each of the mesh's facets' settings: the entry named after it, else the
 /// entry named "*".
-fn match_facets(node: &NodeSpec, mesh: &TriMesh) -> Result<Vec<FacetSettings>> {
+pub fn match_facets(node: &NodeSpec, mesh: &TriMesh) -> Result<Vec<FacetSettings>> {
     let names = &mesh.facets.as_ref().expect("set by node_mesh").names;
     for f in &node.facets {
         if f.name != "*" && !names.contains(&f.name) {

@@ -6,7 +6,7 @@ pub mod bake;
 pub mod build;
 pub mod composite;
 pub mod contrast;
+pub mod draw;
 pub mod file;
 pub mod gltf;
-pub mod preview;
 pub mod uterus;

@@ -6,10 +6,12 @@
 //! ships for the GPU.
 
 pub mod cut;
+pub mod interior;
 pub mod section;
 
 pub use cut::{
     Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,
     sample_points, section_glb, texture_coordinates, texture_surface,
 };
-pub use section::{Frame, Plane, Section, plane_section};
+pub use interior::interior_block;
+pub use section::{Frame, Plane, Section, capped, plane_section};

@@ -429,3 +429,56 @@ mod tests {
         assert!(Plane::new(DVec3::new(f64::NAN, 0.0, 1.0), 1.0).is_err());
     }
 }
+
+/// `mesh` with each boundary loop closed by a fan from the loop's
+/// centroid, and its topology: so an organ with openings (the uterine
+/// cavity's cervical canal) can still be cut, each opening sectioned as if
+/// a flat lid closed it. A closed mesh comes back as it is.
+pub fn capped(mesh: &TriMesh, topology: &Topology) -> Result<(TriMesh, Topology)> {
+    if topology.boundary_loops().is_empty() {
+        return Ok((mesh.clone(), topology.clone()));
+    }
+    let mut positions = mesh.positions.clone();
+    let mut triangles = mesh.triangles.clone();
+    for lp in topology.boundary_loops() {
+        let verts: Vec<u32> = lp
+            .iter()
+            .map(|&h| topology.origin(h).idx() as u32)
+            .collect();
+        let centroid =
+            verts.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / verts.len() as f64;
+        let c = positions.len() as u32;
+        positions.push(centroid);
+        // A twinless half-edge a -> b borders its face; the lid's face
+        // runs b -> a so the two agree in orientation.
+        for (i, &a) in verts.iter().enumerate() {
+            let b = verts[(i + 1) % verts.len()];
+            triangles.push([b, a, c]);
+        }
+    }
+    let lidded = TriMesh::new(positions, triangles);
+    let topology = Topology::build(&lidded)?;
+    Ok((lidded, topology))
+}
+
+#[cfg(test)]
+mod capped_tests {
+    use super::*;
+
+    #[test]
+    fn a_capped_open_cylinder_is_closed_and_cuts() {
+        let mesh = crate::mesh::shapes::open_cylinder(1.0, 2.0, 24, 6);
+        let topology = Topology::build(&mesh).unwrap();
+        assert_eq!(topology.boundary_loops().len(), 2);
+        let (lidded, t) = capped(&mesh, &topology).unwrap();
+        assert!(t.boundary_loops().is_empty());
+        let s = plane_section(
+            &lidded,
+            &t,
+            Plane::new(DVec3::new(1.0, 0.0, 0.0), 0.0).unwrap(),
+        )
+        .unwrap();
+        // Through the axis: a 2 x 2 rectangle.
+        assert!((s.area() - 4.0).abs() < 1e-9, "{}", s.area());
+    }
+}

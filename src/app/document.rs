@@ -1,0 +1,311 @@
+//! The viewer's model, free of any UI: the scene being designed (its spec
+//! with one settings entry per mesh facet), the node meshes, and the baked
+//! (unwrapped) scene once the user has unwrapped it. Loading and saving
+//! fail with errors that name the file; a failed load leaves the current
+//! document as it was (the caller only replaces it on success).
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::mesh::{Topology, TriMesh};
+use crate::scene::build::{BakedScene, match_facets, node_mesh};
+use crate::scene::file::{
+    self, BakeSettings, Camera, FacetSettings, Interior, MeshSpec, NodeSpec, Origin, SceneSpec,
+};
+use crate::scene::uterus::CavityParams;
+
+pub struct Document {
+    pub spec: SceneSpec,
+    pub meshes: Vec<TriMesh>,
+    pub topologies: Vec<Topology>,
+    /// Each mesh with its openings closed (`solid::capped`), for cuts.
+    pub closed: Vec<(TriMesh, Topology)>,
+    /// Set by an unwrap; dropped when the cut must be redone.
+    pub baked: Option<BakedScene>,
+}
+
+impl Document {
+    /// A scene file (.toml), or a bare mesh given the first tissue of the
+    /// bundled database on every facet.
+    pub fn open(path: &Path) -> Result<Document> {
+        let is_scene = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        let spec = if is_scene {
+            file::load(path)?
+        } else {
+            bare_mesh_scene(path)?
+        };
+        Document::of_spec(spec)
+    }
+
+    /// Read every node's mesh and give each of its facets its own
+    /// settings entry (named after it), so each can be changed alone.
+    pub fn of_spec(mut spec: SceneSpec) -> Result<Document> {
+        let db = crate::db::Database::open(&spec.database)?;
+        let ids: Vec<String> = db.tissues.iter().map(|t| t.id.clone()).collect();
+        file::check_tissues(&spec, &ids)?;
+        let mut meshes = Vec::new();
+        let mut topologies = Vec::new();
+        for node in &mut spec.nodes {
+            let (mesh, topology) = node_mesh(node)?;
+            let names = mesh
+                .facets
+                .as_ref()
+                .map(|f| f.names.clone())
+                .unwrap_or_default();
+            let mut settings = match_facets(node, &mesh)?;
+            for (s, name) in settings.iter_mut().zip(names) {
+                s.name = name;
+            }
+            node.facets = settings;
+            meshes.push(mesh);
+            topologies.push(topology);
+        }
+        let closed = meshes
+            .iter()
+            .zip(&topologies)
+            .map(|(m, t)| crate::solid::capped(m, t))
+            .collect::<Result<_>>()?;
+        Ok(Document {
+            spec,
+            meshes,
+            topologies,
+            closed,
+            baked: None,
+        })
+    }
+
+    /// Settings of facet `facet` (its id in the mesh) of node `node`.
+    pub fn settings(&self, (node, facet): (usize, usize)) -> &FacetSettings {
+        &self.spec.nodes[node].facets[facet]
+    }
+
+    /// Change a facet's settings, in the spec and in the baked scene.
+    pub fn set_settings(&mut self, (node, facet): (usize, usize), settings: FacetSettings) {
+        if let Some(baked) = &mut self.baked
+            && let Some(f) = baked.nodes[node]
+                .facets
+                .iter_mut()
+                .find(|f| f.piece.facet as usize == facet)
+        {
+            f.settings = settings.clone();
+        }
+        self.spec.nodes[node].facets[facet] = settings;
+    }
+
+    /// Every facet as (node, facet id, "node / facet").
+    pub fn facets(&self) -> Vec<((usize, usize), String)> {
+        let mut out = Vec::new();
+        for (k, node) in self.spec.nodes.iter().enumerate() {
+            for (j, f) in node.facets.iter().enumerate() {
+                out.push(((k, j), format!("{} / {}", node.name, f.name)));
+            }
+        }
+        out
+    }
+
+    pub fn bounds(&self) -> Option<(glam::DVec3, glam::DVec3)> {
+        self.meshes
+            .iter()
+            .filter_map(|m| m.bounding_box())
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    /// Write the scene as a scene file, every facet listed by name, paths
+    /// absolute (so the file can be moved).
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let out = SavedScene {
+            name: &self.spec.name,
+            database: absolute(&self.spec.database),
+            camera: &self.spec.cameras,
+            node: self
+                .spec
+                .nodes
+                .iter()
+                .map(|n| SavedNode {
+                    name: &n.name,
+                    mesh: match &n.mesh {
+                        MeshSpec::File(p) => SavedMesh {
+                            file: Some(absolute(p)),
+                            uterine_cavity: None,
+                        },
+                        MeshSpec::UterineCavity(c) => SavedMesh {
+                            file: None,
+                            uterine_cavity: Some(c),
+                        },
+                    },
+                    facet: &n.facets,
+                    interior: n.interior.as_ref(),
+                })
+                .collect(),
+            bake: &self.spec.bake,
+        };
+        let text = toml::to_string_pretty(&out)
+            .map_err(|e| Error::invalid(format!("cannot write the scene as TOML: {e}")))?;
+        crate::atomic::write_file(path, |w| w.write_all(text.as_bytes()))
+    }
+}
+
+fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+}
+
+/// A scene of one node, the mesh at `path`, every facet the bundled
+/// database's first colour tissue.
+fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
+    let known = path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        crate::mesh::io::READABLE
+            .iter()
+            .any(|m| e.eq_ignore_ascii_case(m))
+    });
+    if !known {
+        return Err(Error::format(
+            path,
+            format!(
+                "not a scene (.toml) or a mesh ({})",
+                crate::mesh::io::READABLE.join(", ")
+            ),
+        ));
+    }
+    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    let db = crate::db::Database::open(&database)?;
+    let texture = db
+        .tissues
+        .iter()
+        .find(|t| t.outputs.contains(&crate::db::Output::Colour))
+        .map(|t| t.id.clone())
+        .ok_or_else(|| Error::format(&database, "the tissue database has no colour texture"))?;
+    let name = path
+        .file_stem()
+        .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+    let origin = Origin {
+        file: path.to_path_buf(),
+        line: 0,
+    };
+    Ok(size_tiles(SceneSpec {
+        path: path.to_path_buf(),
+        name: name.clone(),
+        database,
+        cameras: Vec::new(),
+        nodes: vec![NodeSpec {
+            name,
+            mesh: MeshSpec::File(path.to_path_buf()),
+            facets: vec![FacetSettings {
+                name: "*".into(),
+                texture,
+                tile_size: 0.0,
+                rotation: 0.0,
+                offset: [0.0, 0.0],
+                bump: 0.0,
+                overlay: None,
+                overlay_opacity: 0.6,
+                overlay_tile_size: 0.0,
+                overlap: 0.0,
+                origin: origin.clone(),
+            }],
+            interior: None,
+            origin,
+        }],
+        bake: BakeSettings::default(),
+    }))
+}
+
+/// A bare mesh's tiles: a sixth of its bounding box's diagonal, so a few
+/// copies of the texture cover it whatever its units.
+fn size_tiles(mut spec: SceneSpec) -> SceneSpec {
+    if let Some(node) = spec.nodes.first_mut()
+        && let MeshSpec::File(path) = &node.mesh
+        && let Ok(mesh) = crate::mesh::io::read(path)
+        && let Some((lo, hi)) = mesh.bounding_box()
+    {
+        let tile = ((hi - lo).length() / 6.0).max(1e-9);
+        for f in &mut node.facets {
+            f.tile_size = tile;
+            f.overlay_tile_size = tile;
+        }
+    }
+    spec
+}
+
+#[derive(Serialize)]
+struct SavedScene<'a> {
+    name: &'a str,
+    database: PathBuf,
+    camera: &'a [Camera],
+    node: Vec<SavedNode<'a>>,
+    bake: &'a BakeSettings,
+}
+
+#[derive(Serialize)]
+struct SavedNode<'a> {
+    name: &'a str,
+    mesh: SavedMesh<'a>,
+    facet: &'a [FacetSettings],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interior: Option<&'a Interior>,
+}
+
+#[derive(Serialize)]
+struct SavedMesh<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    file: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    uterine_cavity: Option<&'a CavityParams>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn repo(p: &str) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(p)
+    }
+
+    #[test]
+    fn a_saved_scene_loads_back_the_same() {
+        let doc = Document::open(&repo("scenes/hysteroscopy_myomas.toml")).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("saved.toml");
+        doc.save(&path).unwrap();
+        let again = Document::open(&path).unwrap();
+        assert_eq!(again.spec.nodes.len(), doc.spec.nodes.len());
+        for (a, b) in again.spec.nodes.iter().zip(&doc.spec.nodes) {
+            assert_eq!(a.mesh, b.mesh);
+            assert_eq!(a.interior, b.interior);
+            let strip = |f: &FacetSettings| FacetSettings {
+                origin: Origin::default(),
+                ..f.clone()
+            };
+            assert_eq!(
+                a.facets.iter().map(strip).collect::<Vec<_>>(),
+                b.facets.iter().map(strip).collect::<Vec<_>>()
+            );
+        }
+        assert_eq!(again.spec.cameras, doc.spec.cameras);
+    }
+
+    #[test]
+    fn a_bare_mesh_gets_a_tissue_on_every_facet() {
+        let doc = Document::open(&repo("tests/data/bunny10k_textured.obj")).unwrap();
+        assert_eq!(doc.meshes.len(), 1);
+        assert!(!doc.spec.nodes[0].facets.is_empty());
+        assert!(doc.spec.nodes[0].facets.iter().all(|f| f.tile_size > 0.0));
+    }
+
+    #[test]
+    fn a_broken_file_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("broken.obj");
+        std::fs::write(&path, "v 0 0 0\nf 1 2 3\n").unwrap();
+        let e = Document::open(&path).err().expect("an error").to_string();
+        assert!(e.contains("broken.obj"), "{e}");
+        let e = Document::open(&dir.path().join("notes.txt"))
+            .err()
+            .expect("an error")
+            .to_string();
+        assert!(e.contains("notes.txt"), "{e}");
+    }
+}

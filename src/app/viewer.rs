@@ -1,0 +1,1037 @@
+//! The viewer window: panels on the left (file, facets, tissues, the
+//! selected facet's texture, layers, cut plane), the scene in the middle,
+//! drawn by `crate::render` into a texture egui shows. Everything slow
+//! runs as a `Job`; the UI only starts jobs, takes their results, and
+//! shows progress and messages.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use eframe::{egui, egui_wgpu};
+use glam::DVec3;
+
+use super::document::Document;
+use super::file_dialog::{FileDialog, Outcome, Purpose};
+use super::jobs::Job;
+use crate::error::{Error, Result};
+use crate::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
+use crate::scene::build::{BakedScene, Tissues, ensure_tissues};
+use crate::scene::draw::DrawList;
+use crate::solid::{Placement, Plane, interior_block, plane_section};
+use crate::synth::volume::Volume;
+
+/// How the viewer starts.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// A scene (.toml) or mesh to open.
+    pub open: Option<PathBuf>,
+    /// Save a screenshot of the window after `frames` frames (once
+    /// loading and unwrapping are done), then close.
+    pub screenshot: Option<PathBuf>,
+    pub frames: usize,
+    /// Drag the selected facet's texture a little every frame (to time
+    /// the drag path).
+    pub drag: bool,
+}
+
+/// What the mouse does in the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Drag turns, right or middle drag pans, the wheel zooms.
+    Camera,
+    /// Drag moves the selected facet's texture, shift-drag turns it, the
+    /// wheel scales it.
+    Texture,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutPlane {
+    pub on: bool,
+    /// Across x, y or z.
+    pub axis: usize,
+    /// Where across the scene's bounds, 0..1.
+    pub at: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Message {
+    pub text: String,
+    pub error: bool,
+}
+
+struct TissueEntry {
+    id: String,
+    name: String,
+    thumbnail: Option<egui::TextureHandle>,
+}
+
+type Thumbnails = Vec<(String, String, Option<egui::ColorImage>)>;
+
+#[derive(Default)]
+struct Jobs {
+    open: Option<Job<Document>>,
+    unwrap: Option<Job<BakedScene>>,
+    tissues: Option<Job<Tissues>>,
+    thumbnails: Option<Job<Thumbnails>>,
+    block: Option<Job<Volume>>,
+    bake: Option<Job<PathBuf>>,
+}
+
+impl Jobs {
+    /// What runs, with the fraction of its stage done.
+    fn busy(&self) -> Vec<(String, Option<f32>)> {
+        let mut out = Vec::new();
+        macro_rules! add {
+            ($j:expr) => {
+                if let Some(j) = &$j {
+                    let (stage, f) = j.progress();
+                    let what = if stage.is_empty() {
+                        j.what.clone()
+                    } else {
+                        format!("{}: {stage}", j.what)
+                    };
+                    out.push((what, f));
+                }
+            };
+        }
+        add!(self.open);
+        add!(self.unwrap);
+        add!(self.tissues);
+        add!(self.block);
+        add!(self.bake);
+        out
+    }
+
+    fn cancel_all(&self) {
+        if let Some(j) = &self.open {
+            j.cancel();
+        }
+        if let Some(j) = &self.unwrap {
+            j.cancel();
+        }
+        if let Some(j) = &self.tissues {
+            j.cancel();
+        }
+        if let Some(j) = &self.block {
+            j.cancel();
+        }
+        if let Some(j) = &self.bake {
+            j.cancel();
+        }
+    }
+}
+
+pub struct Viewer {
+    gpu: Gpu,
+    egui_renderer: Arc<eframe::epaint::mutex::RwLock<egui_wgpu::Renderer>>,
+    renderer: Renderer,
+    target: Option<(Offscreen, egui::TextureId)>,
+    pub doc: Option<Document>,
+    pub list: DrawList,
+    scene: Option<GpuScene>,
+    /// Times the scene's vertex data went to the GPU (a texture drag
+    /// must not add to it).
+    pub uploads: usize,
+    pub camera: OrbitCamera,
+    pub layers: Layers,
+    pub selected: Option<(usize, usize)>,
+    pub mode: Mode,
+    pub cut: CutPlane,
+    block: Option<(usize, Placement)>,
+    /// The cut plane the section was last made for.
+    cut_made: Option<(usize, f64)>,
+    pub message: Option<Message>,
+    tissues: Vec<TissueEntry>,
+    dialog: Option<FileDialog>,
+    jobs: Jobs,
+    dirty: bool,
+    opts: Options,
+    frames_left: Option<usize>,
+    screenshot_result: Arc<Mutex<Option<Result<()>>>>,
+    pub frame_times: Vec<f64>,
+    last_frame: Option<Instant>,
+    ctx: egui::Context,
+}
+
+/// Error out of the screenshot, reported by `run` after the window closes.
+pub type ScreenshotSlot = Arc<Mutex<Option<Result<()>>>>;
+
+impl Viewer {
+    /// A viewer on eframe's wgpu device (the window's, or the test
+    /// harness's).
+    pub fn new(cc: &eframe::CreationContext<'_>, opts: Options) -> Result<Viewer> {
+        let rs = cc
+            .wgpu_render_state
+            .as_ref()
+            .ok_or_else(|| Error::invalid("the viewer needs eframe's wgpu renderer"))?;
+        let info = rs.adapter.get_info();
+        let gpu = Gpu::from_parts(
+            rs.device.clone(),
+            rs.queue.clone(),
+            format!("{} ({:?})", info.name, info.backend),
+        );
+        let renderer = Renderer::new(&gpu.device);
+        let mut viewer = Viewer {
+            gpu,
+            egui_renderer: rs.renderer.clone(),
+            renderer,
+            target: None,
+            doc: None,
+            list: DrawList::default(),
+            scene: None,
+            uploads: 0,
+            camera: OrbitCamera::fit(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            layers: Layers::default(),
+            selected: None,
+            mode: Mode::Camera,
+            cut: CutPlane {
+                on: false,
+                axis: 0,
+                at: 0.5,
+            },
+            block: None,
+            cut_made: None,
+            message: None,
+            tissues: Vec::new(),
+            dialog: None,
+            jobs: Jobs::default(),
+            dirty: true,
+            frames_left: opts.screenshot.as_ref().map(|_| opts.frames.max(1)),
+            opts: opts.clone(),
+            screenshot_result: Arc::new(Mutex::new(None)),
+            frame_times: Vec::new(),
+            last_frame: None,
+            ctx: cc.egui_ctx.clone(),
+        };
+        if let Some(path) = opts.open {
+            viewer.open(path);
+        }
+        Ok(viewer)
+    }
+
+    pub fn screenshot_slot(&self) -> ScreenshotSlot {
+        self.screenshot_result.clone()
+    }
+
+    /// Whether any job is running.
+    pub fn busy(&self) -> bool {
+        !self.jobs.busy().is_empty() || self.jobs.thumbnails.is_some()
+    }
+
+    pub fn adapter(&self) -> &str {
+        &self.gpu.adapter
+    }
+
+    fn wake(&self) -> impl Fn() + Send + 'static {
+        let ctx = self.ctx.clone();
+        move || ctx.request_repaint()
+    }
+
+    fn error(&mut self, e: impl std::fmt::Display) {
+        self.message = Some(Message {
+            text: e.to_string(),
+            error: true,
+        });
+    }
+
+    /// Start opening `path`; the current scene stays until it has loaded.
+    pub fn open(&mut self, path: PathBuf) {
+        let what = format!("opening {}", path.display());
+        self.jobs.open = Some(Job::spawn(what, self.wake(), move |_| {
+            Document::open(&path)
+        }));
+    }
+
+    /// Start unwrapping (cutting and flattening) every facet.
+    pub fn unwrap(&mut self) {
+        let Some(doc) = &self.doc else { return };
+        if self.jobs.unwrap.is_some() {
+            return;
+        }
+        let spec = doc.spec.clone();
+        self.jobs.unwrap = Some(Job::spawn("unwrapping", self.wake(), move |p| {
+            crate::scene::build::build_scene(&spec, false, p)
+        }));
+    }
+
+    /// Give the selected facet tissue `id`.
+    pub fn pick_tissue(&mut self, id: &str) {
+        let (Some(doc), Some(f)) = (&mut self.doc, self.selected) else {
+            return;
+        };
+        let mut s = doc.settings(f).clone();
+        s.texture = id.to_string();
+        doc.set_settings(f, s);
+        if doc.baked.is_some() {
+            self.rebuild_tissues();
+        }
+    }
+
+    /// The tissue textures the scene now uses (built if missing), then a
+    /// fresh draw list.
+    fn rebuild_tissues(&mut self) {
+        let Some(doc) = &self.doc else { return };
+        let spec = doc.spec.clone();
+        self.jobs.tissues = Some(Job::spawn("tissue textures", self.wake(), move |p| {
+            let db = crate::db::Database::open(&spec.database)?;
+            ensure_tissues(&spec, &db, p)
+        }));
+    }
+
+    /// Apply a change to the selected facet's texture transform: one
+    /// uniform per material of that facet, nothing that grows with the
+    /// mesh.
+    pub fn edit_texture(&mut self, edit: impl FnOnce(&mut crate::scene::file::FacetSettings)) {
+        let (Some(doc), Some(f)) = (&mut self.doc, self.selected) else {
+            return;
+        };
+        let mut s = doc.settings(f).clone();
+        edit(&mut s);
+        s.tile_size = s.tile_size.max(1e-9);
+        doc.set_settings(f, s.clone());
+        if let Some(scene) = &self.scene {
+            for m in 0..self.list.materials.len() {
+                if self.list.materials[m].facet == Some(f) {
+                    let t = self.list.materials[m].transform_for(&s);
+                    self.list.materials[m].transform = t;
+                    scene.set_transform(&self.gpu.queue, &self.list, m, t.as_ref());
+                }
+            }
+        }
+        self.dirty = true;
+    }
+
+    /// Select facet `f`.
+    pub fn select(&mut self, f: (usize, usize)) {
+        self.selected = Some(f);
+        if self.doc.as_ref().is_some_and(|d| d.baked.is_none()) {
+            self.rebuild_list();
+        }
+    }
+
+    /// Draw list and GPU scene from the document as it is.
+    fn rebuild_list(&mut self) {
+        let Some(doc) = &self.doc else {
+            self.list = DrawList::default();
+            self.scene = None;
+            return;
+        };
+        self.list = match &doc.baked {
+            Some(b) => DrawList::of(b, None),
+            None => DrawList::plain(&doc.meshes.iter().collect::<Vec<_>>(), self.selected),
+        };
+        match GpuScene::new(
+            &self.renderer,
+            &self.gpu.device,
+            &self.gpu.queue,
+            &self.list,
+        ) {
+            Ok(mut s) => {
+                // The interior block stays.
+                if let Some(old) = self.scene.take() {
+                    s.keep_block(old);
+                }
+                self.scene = Some(s);
+                self.uploads += 1;
+                self.cut_made = None;
+            }
+            Err(e) => self.error(e),
+        }
+        self.dirty = true;
+    }
+
+    /// Take finished jobs' results.
+    fn poll_jobs(&mut self) {
+        if let Some(r) = self.jobs.open.as_mut().and_then(Job::poll) {
+            self.jobs.open = None;
+            match r {
+                Ok(doc) => {
+                    let is_scene = doc.spec.path.extension().is_some_and(|e| e == "toml");
+                    let bounds = doc.bounds();
+                    let (lo, hi) = bounds.unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
+                    self.camera = match doc.spec.cameras.first() {
+                        Some(c) => OrbitCamera::from_scene(c, (hi - lo).length() / 2.0),
+                        None => OrbitCamera::fit(lo, hi),
+                    };
+                    self.jobs.unwrap = None;
+                    self.jobs.tissues = None;
+                    let db = doc.spec.database.clone();
+                    self.doc = Some(doc);
+                    self.selected = Some((0, 0));
+                    self.block = None;
+                    self.scene = None;
+                    self.cut.on = false;
+                    self.message = None;
+                    self.rebuild_list();
+                    self.jobs.thumbnails = Some(Job::spawn("thumbnails", self.wake(), move |_| {
+                        thumbnails(&db)
+                    }));
+                    // A designed scene shows textured at once; a bare
+                    // mesh waits for its tissues and the Unwrap button.
+                    if is_scene {
+                        self.unwrap();
+                    }
+                }
+                Err(e) => self.error(e),
+            }
+        }
+        if let Some(r) = self.jobs.unwrap.as_mut().and_then(Job::poll) {
+            self.jobs.unwrap = None;
+            match r {
+                Ok(baked) => {
+                    if let Some(doc) = &mut self.doc {
+                        // Settings changed during the unwrap win.
+                        let mut baked = baked;
+                        for (k, node) in baked.nodes.iter_mut().enumerate() {
+                            for f in &mut node.facets {
+                                f.settings =
+                                    doc.spec.nodes[k].facets[f.piece.facet as usize].clone();
+                            }
+                        }
+                        doc.baked = Some(baked);
+                        // Tissues picked while unwrapping.
+                        self.rebuild_tissues();
+                    }
+                }
+                Err(Error::Cancelled) => {
+                    self.message = Some(Message {
+                        text: "unwrap cancelled".into(),
+                        error: false,
+                    })
+                }
+                Err(e) => self.error(e),
+            }
+        }
+        if let Some(r) = self.jobs.tissues.as_mut().and_then(Job::poll) {
+            self.jobs.tissues = None;
+            match r {
+                Ok(t) => {
+                    if let Some(b) = self.doc.as_mut().and_then(|d| d.baked.as_mut()) {
+                        b.tissues = t;
+                    }
+                    self.rebuild_list();
+                }
+                Err(Error::Cancelled) => {}
+                Err(e) => self.error(e),
+            }
+        }
+        if let Some(r) = self.jobs.thumbnails.as_mut().and_then(Job::poll) {
+            self.jobs.thumbnails = None;
+            match r {
+                Ok(list) => {
+                    self.tissues = list
+                        .into_iter()
+                        .map(|(id, name, img)| TissueEntry {
+                            thumbnail: img.map(|i| {
+                                self.ctx
+                                    .load_texture(format!("tissue:{id}"), i, Default::default())
+                            }),
+                            id,
+                            name,
+                        })
+                        .collect()
+                }
+                Err(e) => self.error(e),
+            }
+        }
+        if let Some(r) = self.jobs.block.as_mut().and_then(Job::poll) {
+            self.jobs.block = None;
+            match r {
+                Ok(volume) => self.set_block(volume),
+                Err(Error::Cancelled) => self.cut.on = false,
+                Err(e) => {
+                    self.cut.on = false;
+                    self.error(e)
+                }
+            }
+        }
+        if let Some(r) = self.jobs.bake.as_mut().and_then(Job::poll) {
+            self.jobs.bake = None;
+            match r {
+                Ok(dir) => {
+                    self.message = Some(Message {
+                        text: format!("baked into {}", dir.display()),
+                        error: false,
+                    })
+                }
+                Err(e) => self.error(e),
+            }
+        }
+    }
+
+    /// Object units one block spans: the scene's interior setting, else a
+    /// third of the scene's diagonal.
+    fn block_units(&self) -> Option<(f64, DVec3)> {
+        let doc = self.doc.as_ref()?;
+        let (lo, hi) = doc.bounds()?;
+        let units = doc
+            .spec
+            .nodes
+            .iter()
+            .find_map(|n| n.interior.as_ref().map(|i| i.block_size))
+            .unwrap_or((hi - lo).length() / 3.0);
+        Some((units, lo))
+    }
+
+    fn set_block(&mut self, volume: Volume) {
+        let Some((units, lo)) = self.block_units() else {
+            return;
+        };
+        let placement = match Placement::new(lo, units / volume.size[0] as f64) {
+            Ok(p) => p,
+            Err(e) => return self.error(e),
+        };
+        if let Some(scene) = &mut self.scene {
+            scene.set_block(
+                &self.renderer,
+                &self.gpu.device,
+                &self.gpu.queue,
+                &volume,
+                &placement,
+            );
+        }
+        self.block = Some((volume.size[0], placement));
+        self.cut_made = None;
+        self.dirty = true;
+    }
+
+    /// Turn the cut plane on; the first time, synthesise the interior.
+    pub fn set_cut(&mut self, on: bool) {
+        self.cut.on = on;
+        self.cut_made = None;
+        self.dirty = true;
+        if !on || self.block.is_some() || self.jobs.block.is_some() {
+            return;
+        }
+        let Some(doc) = &self.doc else { return };
+        let interior = doc
+            .spec
+            .nodes
+            .iter()
+            .find_map(|n| n.interior.as_ref().map(|i| i.texture.clone()));
+        let Some(tissue) =
+            interior.or_else(|| self.selected.map(|f| doc.settings(f).texture.clone()))
+        else {
+            return;
+        };
+        let database = doc.spec.database.clone();
+        self.jobs.block = Some(Job::spawn(
+            "interior solid texture",
+            self.wake(),
+            move |p| {
+                let db = crate::db::Database::open(&database)?;
+                let t = db.tissue(&tissue)?;
+                if !crate::db::build::is_current(&db, t)? {
+                    crate::db::build(&db, std::slice::from_ref(&tissue), p)?;
+                }
+                interior_block(
+                    &db.output_path(&tissue, crate::db::Output::Colour),
+                    32,
+                    0,
+                    p,
+                )
+            },
+        ));
+    }
+
+    /// The plane's normal and offset in object space.
+    pub fn cut_plane(&self) -> Option<(DVec3, f64)> {
+        if !self.cut.on {
+            return None;
+        }
+        let (lo, hi) = self.doc.as_ref()?.bounds()?;
+        let mut n = DVec3::ZERO;
+        n[self.cut.axis] = 1.0;
+        Some((
+            n,
+            lo[self.cut.axis] + self.cut.at * (hi - lo)[self.cut.axis],
+        ))
+    }
+
+    /// Remake the section when the plane moved.
+    fn update_section(&mut self) {
+        let plane = self.cut_plane().filter(|_| self.block.is_some());
+        let key = plane.map(|(_, d)| (self.cut.axis, d));
+        if key == self.cut_made {
+            return;
+        }
+        self.cut_made = key;
+        let (Some(doc), Some(scene)) = (&self.doc, &mut self.scene) else {
+            return;
+        };
+        let Some((normal, offset)) = plane else {
+            scene.set_cut(&self.gpu.device, None);
+            return;
+        };
+        let mut cut = CutMesh {
+            positions: Vec::new(),
+            normals: Vec::new(),
+            triangles: Vec::new(),
+        };
+        let mut problem = None;
+        for (k, (mesh, topology)) in doc.closed.iter().enumerate() {
+            let section = Plane::new(normal, offset).and_then(|p| plane_section(mesh, topology, p));
+            match section {
+                Ok(s) => {
+                    let base = cut.positions.len() as u32;
+                    cut.normals
+                        .extend(std::iter::repeat_n(s.normal, s.positions.len()));
+                    cut.positions.extend(&s.positions);
+                    cut.triangles
+                        .extend(s.triangles.iter().map(|t| t.map(|v| v + base)));
+                }
+                Err(e) => problem = Some(format!("node '{}': {e}", doc.spec.nodes[k].name)),
+            }
+        }
+        scene.set_cut(&self.gpu.device, Some(&cut));
+        if let Some(p) = problem {
+            self.error(format!("cannot cut: {p}"));
+        }
+        self.dirty = true;
+    }
+
+    /// Draw the scene into a texture `size` pixels, for egui to show.
+    fn draw_scene(&mut self, size: [u32; 2]) -> Option<egui::TextureId> {
+        let resized = self.target.as_ref().is_none_or(|(t, _)| t.size != size);
+        if resized {
+            let target = Offscreen::new(&self.gpu.device, size);
+            let mut r = self.egui_renderer.write();
+            let id = match self.target.take() {
+                Some((_, id)) => {
+                    r.update_egui_texture_from_wgpu_texture(
+                        &self.gpu.device,
+                        &target.display_view,
+                        wgpu::FilterMode::Linear,
+                        id,
+                    );
+                    id
+                }
+                None => r.register_native_texture(
+                    &self.gpu.device,
+                    &target.display_view,
+                    wgpu::FilterMode::Linear,
+                ),
+            };
+            self.target = Some((target, id));
+            self.dirty = true;
+        }
+        let (target, id) = self.target.as_ref()?;
+        if self.dirty
+            && let Some(scene) = &self.scene
+        {
+            let view = View {
+                camera: self.camera,
+                layers: self.layers,
+                clip: self.cut_plane().filter(|_| self.block.is_some()),
+            };
+            target.draw(
+                &self.renderer,
+                &self.gpu.device,
+                &self.gpu.queue,
+                scene,
+                &view,
+            );
+            self.dirty = false;
+        }
+        Some(*id)
+    }
+
+    /// Triangles of the cut surface drawn.
+    pub fn cut_triangles(&self) -> usize {
+        self.scene.as_ref().map_or(0, GpuScene::cut_triangles)
+    }
+
+    /// The last frame drawn, read back (tests).
+    pub fn read_scene(&self) -> Result<image::RgbaImage> {
+        let (target, _) = self
+            .target
+            .as_ref()
+            .ok_or_else(|| Error::invalid("nothing drawn yet"))?;
+        target.read(&self.gpu.device, &self.gpu.queue)
+    }
+
+    fn save(&mut self, path: PathBuf) {
+        let path = if path.extension().is_none() {
+            path.with_extension("toml")
+        } else {
+            path
+        };
+        if let Some(doc) = &self.doc {
+            self.message = Some(match doc.save(&path) {
+                Ok(()) => Message {
+                    text: format!("saved {}", path.display()),
+                    error: false,
+                },
+                Err(e) => Message {
+                    text: e.to_string(),
+                    error: true,
+                },
+            });
+        }
+    }
+
+    /// Save the scene into out/<name>/scene.toml and bake it there.
+    pub fn bake(&mut self) {
+        let Some(doc) = &self.doc else { return };
+        let dir = PathBuf::from("out").join(doc.spec.name.replace(['/', '\\', ' '], "_"));
+        let scene = dir.join("scene.toml");
+        if let Err(e) = std::fs::create_dir_all(&dir)
+            .map_err(|e| Error::io(&dir, e))
+            .and_then(|_| doc.save(&scene))
+        {
+            return self.error(e);
+        }
+        self.jobs.bake = Some(Job::spawn("baking", self.wake(), move |p| {
+            crate::scene::bake::bake(&scene, &dir, &Default::default(), p).map(|_| dir)
+        }));
+    }
+
+    fn top_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if ui.button("Open…").clicked() {
+                let dir = std::env::current_dir().unwrap_or_default();
+                self.dialog = Some(FileDialog::new(Purpose::Open, dir, String::new()));
+            }
+            let has_doc = self.doc.is_some();
+            if ui
+                .add_enabled(has_doc, egui::Button::new("Save…"))
+                .clicked()
+            {
+                let dir = std::env::current_dir().unwrap_or_default();
+                let name = self
+                    .doc
+                    .as_ref()
+                    .map_or("scene".into(), |d| format!("{}.toml", d.spec.name));
+                self.dialog = Some(FileDialog::new(Purpose::Save, dir, name));
+            }
+            if ui
+                .add_enabled(
+                    has_doc && self.jobs.bake.is_none(),
+                    egui::Button::new("Bake"),
+                )
+                .clicked()
+            {
+                self.bake();
+            }
+            ui.separator();
+            let busy = self.jobs.busy();
+            for (what, fraction) in &busy {
+                let bar = egui::ProgressBar::new(fraction.unwrap_or(0.0))
+                    .desired_width(160.0)
+                    .text(what.clone());
+                ui.add(if fraction.is_none() {
+                    bar.animate(true)
+                } else {
+                    bar
+                });
+            }
+            if !busy.is_empty() && ui.button("Cancel").clicked() {
+                self.jobs.cancel_all();
+            }
+            if let Some(m) = &self.message {
+                let colour = if m.error {
+                    egui::Color32::from_rgb(255, 110, 100)
+                } else {
+                    egui::Color32::from_rgb(150, 220, 150)
+                };
+                ui.colored_label(colour, &m.text);
+                if ui.small_button("Dismiss").clicked() {
+                    self.message = None;
+                }
+            }
+        });
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        let Some(doc) = &self.doc else {
+            ui.label("Open a scene or a mesh (Open…).");
+            return;
+        };
+        ui.heading(&doc.spec.name);
+        ui.label("Facets");
+        let facets = doc.facets();
+        let mut select = None;
+        for (f, name) in facets {
+            if ui
+                .selectable_label(self.selected == Some(f), name)
+                .clicked()
+            {
+                select = Some(f);
+            }
+        }
+        if let Some(f) = select {
+            self.select(f);
+        }
+        ui.separator();
+        let unwrapping = self.jobs.unwrap.is_some();
+        if ui
+            .add_enabled(!unwrapping, egui::Button::new("Unwrap"))
+            .on_hover_text("Cut every facet along hidden seams and flatten it (Seamster + ABF++)")
+            .clicked()
+        {
+            self.unwrap();
+        }
+        ui.separator();
+        ui.label("Tissue");
+        let current = self
+            .selected
+            .and_then(|f| self.doc.as_ref().map(|d| d.settings(f).texture.clone()));
+        let mut pick = None;
+        egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
+            for (i, t) in self.tissues.iter().enumerate() {
+                let on = current.as_deref() == Some(t.id.as_str());
+                let r = match &t.thumbnail {
+                    Some(tex) => ui.add(
+                        egui::Button::image_and_text(
+                            egui::Image::new((tex.id(), egui::vec2(48.0, 48.0))),
+                            &t.name,
+                        )
+                        .selected(on),
+                    ),
+                    None => ui.add(egui::Button::new(&t.name).selected(on)),
+                };
+                if r.clicked() {
+                    pick = Some(t.id.clone());
+                }
+                if i % 2 == 1 {
+                    ui.end_row();
+                }
+            }
+        });
+        if let Some(id) = pick {
+            self.pick_tissue(&id);
+        }
+        if let (Some(f), Some(doc)) = (self.selected, &self.doc) {
+            ui.separator();
+            ui.label("Texture (or drag it in Texture mode)");
+            let s = doc.settings(f).clone();
+            let (mut tile, mut rotation, mut offset) = (s.tile_size, s.rotation, s.offset);
+            let mut changed = false;
+            changed |= ui
+                .add(
+                    egui::Slider::new(&mut tile, s.tile_size * 0.5..=s.tile_size * 2.0)
+                        .text("tile size"),
+                )
+                .changed();
+            changed |= ui
+                .add(egui::Slider::new(&mut rotation, -180.0..=180.0).text("rotation °"))
+                .changed();
+            changed |= ui
+                .add(egui::Slider::new(&mut offset[0], -1.0..=1.0).text("offset u"))
+                .changed();
+            changed |= ui
+                .add(egui::Slider::new(&mut offset[1], -1.0..=1.0).text("offset v"))
+                .changed();
+            if changed {
+                self.edit_texture(|s| {
+                    s.tile_size = tile;
+                    s.rotation = rotation;
+                    s.offset = offset;
+                });
+            }
+        }
+        ui.separator();
+        ui.label("Show");
+        let before = self.layers;
+        ui.checkbox(&mut self.layers.seam_blend, "seam blend");
+        ui.checkbox(&mut self.layers.bump, "bump");
+        ui.checkbox(&mut self.layers.overlay, "overlay");
+        ui.checkbox(&mut self.layers.wireframe, "wireframe");
+        ui.checkbox(&mut self.layers.seams, "seams");
+        ui.checkbox(&mut self.layers.heat, "distortion");
+        if self.layers != before {
+            self.dirty = true;
+        }
+        ui.separator();
+        let mut on = self.cut.on;
+        if ui.checkbox(&mut on, "cut plane").changed() {
+            self.set_cut(on);
+        }
+        if self.cut.on {
+            let before = self.cut;
+            ui.horizontal(|ui| {
+                ui.radio_value(&mut self.cut.axis, 0, "x");
+                ui.radio_value(&mut self.cut.axis, 1, "y");
+                ui.radio_value(&mut self.cut.axis, 2, "z");
+            });
+            ui.add(egui::Slider::new(&mut self.cut.at, 0.0..=1.0).text("position"));
+            if self.cut != before {
+                self.dirty = true;
+            }
+        }
+    }
+
+    fn scene_panel(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.radio_value(&mut self.mode, Mode::Camera, "Camera")
+                .on_hover_text("drag: turn · right/middle drag: pan · wheel: zoom");
+            ui.radio_value(&mut self.mode, Mode::Texture, "Texture")
+                .on_hover_text(
+                    "drag: move · shift-drag: turn · wheel: scale the selected facet's texture",
+                );
+            if self.cut.on {
+                ui.label("ctrl-drag: move the cut plane");
+            }
+        });
+        let avail = ui.available_size();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = [
+            (avail.x * ppp).max(1.0) as u32,
+            (avail.y * ppp).max(1.0) as u32,
+        ];
+        let Some(id) = self.draw_scene(size) else {
+            return;
+        };
+        let response = ui.add(egui::Image::new((id, avail)).sense(egui::Sense::click_and_drag()));
+        let (shift, ctrl) = ui.input(|i| (i.modifiers.shift, i.modifiers.command));
+        let delta = response.drag_delta();
+        let d = (delta.x as f64, delta.y as f64);
+        let height = avail.y as f64;
+        if response.dragged() && delta != egui::Vec2::ZERO {
+            if ctrl && self.cut.on {
+                let (n, _) = self.cut_plane().unwrap_or((DVec3::X, 0.0));
+                let (right, up) = self.camera.right_up();
+                let along = (right * d.0 - up * d.1).dot(n) / height;
+                self.cut.at = (self.cut.at + along).clamp(0.0, 1.0);
+            } else if self.mode == Mode::Texture
+                && response.dragged_by(egui::PointerButton::Primary)
+            {
+                let k = self.camera.units_per_pixel(height);
+                if shift {
+                    self.edit_texture(|s| s.rotation += d.0 * 0.5);
+                } else {
+                    self.edit_texture(|s| {
+                        s.offset[0] -= d.0 * k / s.tile_size;
+                        s.offset[1] += d.1 * k / s.tile_size;
+                    });
+                }
+            } else if response.dragged_by(egui::PointerButton::Primary) {
+                self.camera.orbit(d.0 * 0.01, d.1 * 0.01);
+            } else {
+                self.camera.pan(d.0, d.1, height);
+            }
+            self.dirty = true;
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y) as f64;
+            if scroll != 0.0 {
+                if self.mode == Mode::Texture {
+                    self.edit_texture(|s| s.tile_size *= (-scroll * 0.002).exp());
+                } else {
+                    self.camera.zoom((-scroll * 0.002).exp());
+                }
+                self.dirty = true;
+            }
+        }
+    }
+
+    /// Count frames for --screenshot and --frames; take the screenshot
+    /// once loading is done and the frames have passed.
+    fn screenshot_step(&mut self, ctx: &egui::Context) {
+        let now = Instant::now();
+        if let Some(last) = self.last_frame
+            && !self.busy()
+        {
+            self.frame_times.push((now - last).as_secs_f64());
+        }
+        self.last_frame = Some(now);
+        if let Some(done) = self
+            .screenshot_result
+            .lock()
+            .expect("not poisoned")
+            .as_ref()
+        {
+            let _ = done;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        let Some(left) = self.frames_left else { return };
+        ctx.request_repaint();
+        if self.busy() {
+            self.frame_times.clear();
+            return;
+        }
+        if self.opts.drag {
+            self.edit_texture(|s| s.offset[0] += 0.002);
+        }
+        // Every frame drawn anew, so frame times are those of real frames.
+        self.dirty = true;
+        if left > 1 {
+            self.frames_left = Some(left - 1);
+        } else if left == 1 {
+            self.frames_left = Some(0);
+            let path = self.opts.screenshot.clone().expect("set with frames_left");
+            let slot = self.screenshot_result.clone();
+            ctx.request_screenshot(move |img| {
+                let rgba: Vec<u8> = img.pixels.iter().flat_map(|c| c.to_array()).collect();
+                let r = image::RgbaImage::from_raw(img.size[0] as u32, img.size[1] as u32, rgba)
+                    .ok_or_else(|| Error::invalid("the screenshot has the wrong size"))
+                    .and_then(|i| {
+                        crate::atomic::write_png(&path, &image::DynamicImage::ImageRgba8(i))
+                    });
+                *slot.lock().expect("not poisoned") = Some(r);
+            });
+        }
+    }
+}
+
+impl eframe::App for Viewer {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.poll_jobs();
+        self.update_section();
+        self.screenshot_step(&ctx);
+        if let Some(dialog) = &mut self.dialog {
+            match dialog.show(&ctx) {
+                Outcome::Pending => {}
+                Outcome::Cancelled => self.dialog = None,
+                Outcome::Chosen(path) => {
+                    let purpose = dialog.purpose;
+                    self.dialog = None;
+                    match purpose {
+                        Purpose::Open => self.open(path),
+                        Purpose::Save => self.save(path),
+                    }
+                }
+            }
+        }
+        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+        egui::Panel::left("side")
+            .default_size(260.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
+            });
+        egui::CentralPanel::default().show(ui, |ui| self.scene_panel(ui));
+        if self.busy() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
+        }
+    }
+}
+
+/// Every tissue's id, name and a 64-pixel thumbnail of its colour texture
+/// (built) or its photograph (not yet built).
+fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
+    let db = crate::db::Database::open(database)?;
+    Ok(db
+        .tissues
+        .iter()
+        .filter(|t| t.outputs.contains(&crate::db::Output::Colour))
+        .map(|t| {
+            let built = db.output_path(&t.id, crate::db::Output::Colour);
+            let path = if built.exists() {
+                built
+            } else {
+                db.root.join(&t.source)
+            };
+            let img = crate::synth::exemplar::read_image(&path).ok().map(|i| {
+                let small = i.thumbnail(64, 64).to_rgba8();
+                egui::ColorImage::from_rgba_unmultiplied(
+                    [small.width() as usize, small.height() as usize],
+                    small.as_raw(),
+                )
+            });
+            (t.id.clone(), t.name.clone(), img)
+        })
+        .collect())
+}

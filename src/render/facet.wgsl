@@ -1,0 +1,137 @@
+// Textured facets, as the .glb draws them (scene::draw): the tissue
+// texture through the material's texture transform (KHR_texture_transform),
+// tangent-space bump from the normal map, blend weight per vertex, lit by
+// a light at the eye as an endoscope lights what it sees (as the bake's
+// software preview did). Also the distortion heat map and the wireframe
+// and seam lines, from the same vertices.
+
+struct Globals {
+    view_proj: mat4x4<f32>,
+    // xyz: the eye; w: a typical depth, for the light's falloff.
+    eye: vec4<f32>,
+    // xyz: the cut plane's normal, w: its offset; points with
+    // dot(n, p) > w are cut away. A zero normal cuts nothing.
+    clip: vec4<f32>,
+    // x: bump on (1) or off (0); y: heat map (1) or texture (0).
+    flags: vec4<f32>,
+}
+
+struct Material {
+    // The texture transform as two rows of a 2x3 matrix.
+    row0: vec4<f32>,
+    row1: vec4<f32>,
+    factor: vec4<f32>,
+    // x: bump strength (0: no normal map).
+    normal: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var colour_texture: texture_2d<f32>;
+@group(1) @binding(2) var colour_sampler: sampler;
+@group(1) @binding(3) var normal_texture: texture_2d<f32>;
+@group(1) @binding(4) var normal_sampler: sampler;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) alpha: f32,
+    @location(4) tangent: vec4<f32>,
+    @location(5) heat: f32,
+}
+
+struct VertexOut {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) alpha: f32,
+    @location(4) tangent: vec4<f32>,
+    @location(5) heat: f32,
+}
+
+fn vertex(v: VertexIn) -> VertexOut {
+    var out: VertexOut;
+    out.clip_position = globals.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    let t = vec3<f32>(v.uv, 1.0);
+    out.uv = vec2<f32>(dot(material.row0.xyz, t), dot(material.row1.xyz, t));
+    out.alpha = v.alpha;
+    out.tangent = v.tangent;
+    out.heat = v.heat;
+    return out;
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    return vertex(v);
+}
+
+fn clipped(p: vec3<f32>) -> bool {
+    return dot(globals.clip.xyz, globals.clip.xyz) > 0.0 && dot(globals.clip.xyz, p) > globals.clip.w;
+}
+
+// Light at the eye, two-sided, fading with distance.
+fn lit(n: vec3<f32>, p: vec3<f32>) -> f32 {
+    let to_eye = globals.eye.xyz - p;
+    let d = length(to_eye);
+    let falloff = 1.0 / (1.0 + pow(d / (1.5 * globals.eye.w), 2.0));
+    return (0.15 + 0.85 * abs(dot(n, to_eye / max(d, 1e-20)))) * (0.4 + 1.2 * falloff);
+}
+
+// Blue (texture squeezed) through white to red (stretched), saturating at
+// a factor of 2 in area.
+fn heat_colour(h: f32) -> vec3<f32> {
+    let t = clamp(h / log(2.0), -1.0, 1.0);
+    if t < 0.0 {
+        return mix(vec3<f32>(1.0), vec3<f32>(0.05, 0.2, 1.0), -t);
+    }
+    return mix(vec3<f32>(1.0), vec3<f32>(1.0, 0.1, 0.05), t);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    if clipped(in.world) {
+        discard;
+    }
+    var n = normalize(in.normal);
+    if globals.flags.x > 0.5 && material.normal.x > 0.0 {
+        let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
+        let b = cross(n, t) * in.tangent.w;
+        let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
+        let m_scaled = vec3<f32>(m.xy * material.normal.x, m.z);
+        n = normalize(t * m_scaled.x + b * m_scaled.y + n * m_scaled.z);
+    }
+    if globals.flags.y > 0.5 {
+        return vec4<f32>(heat_colour(in.heat) * lit(n, in.world), 1.0);
+    }
+    let c = textureSample(colour_texture, colour_sampler, in.uv) * material.factor;
+    return vec4<f32>(c.rgb * lit(n, in.world), c.a * in.alpha);
+}
+
+// Lines sit a little towards the eye so the faces they border do not hide
+// them.
+@vertex
+fn vs_line(v: VertexIn) -> VertexOut {
+    var out = vertex(v);
+    out.clip_position.z = out.clip_position.z - 2e-4 * out.clip_position.w;
+    return out;
+}
+
+@fragment
+fn fs_wire(in: VertexOut) -> @location(0) vec4<f32> {
+    if clipped(in.world) {
+        discard;
+    }
+    return vec4<f32>(0.02, 0.02, 0.03, 1.0);
+}
+
+@fragment
+fn fs_seam(in: VertexOut) -> @location(0) vec4<f32> {
+    if clipped(in.world) {
+        discard;
+    }
+    return vec4<f32>(1.0, 0.85, 0.0, 1.0);
+}

@@ -1,0 +1,23 @@
+//! The GPU renderer (wgpu, WGSL) that the viewer and the bake's preview
+//! share: a baked scene's draw list (`scene::draw`, the same primitives
+//! the .glb holds) as textured facets with their texture transforms as
+//! uniforms, blend layers with per-vertex alpha, normal-mapped bump,
+//! overlays, cut surfaces sampling the interior block as a 3D texture,
+//! and wireframe, seam and distortion views.
+//!
+//! One code path: `Renderer::render` draws into any colour and depth
+//! view. `Offscreen` owns such a pair and reads it back as an image (the
+//! bake's preview.png, tests, `organtex view --screenshot`); the viewer
+//! hands the same pair's colour texture to egui to show.
+
+mod camera;
+mod gpu;
+mod gpu_scene;
+mod preview;
+mod renderer;
+
+pub use camera::OrbitCamera;
+pub use gpu::Gpu;
+pub use gpu_scene::{CutMesh, GpuScene};
+pub use preview::{preview, scene_camera};
+pub use renderer::{Layers, Offscreen, Renderer, View};

@@ -1,0 +1,622 @@
+//! The pipelines and the one draw routine (`Renderer::render`), and the
+//! offscreen target that reads a frame back as an image.
+
+use glam::DVec3;
+
+use super::camera::OrbitCamera;
+use super::gpu_scene::{GpuScene, VERTEX_FLOATS};
+use crate::error::{Error, Result};
+use crate::scene::draw::{LayerKind, Wrap};
+
+/// What a frame shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layers {
+    /// Seam bands and overlap rings blended over the facets.
+    pub seam_blend: bool,
+    pub bump: bool,
+    pub overlay: bool,
+    pub wireframe: bool,
+    /// Chart boundaries (seams and facet borders) as lines.
+    pub seams: bool,
+    /// Area distortion of the flattening instead of the texture.
+    pub heat: bool,
+}
+
+impl Default for Layers {
+    fn default() -> Self {
+        Layers {
+            seam_blend: true,
+            bump: true,
+            overlay: true,
+            wireframe: false,
+            seams: false,
+            heat: false,
+        }
+    }
+}
+
+/// A frame's camera, layers and cut plane.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub camera: OrbitCamera,
+    pub layers: Layers,
+    /// Points with normal . p > offset are cut away.
+    pub clip: Option<(DVec3, f64)>,
+}
+
+const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Dark red-brown, as the inside of a body looks past the light.
+const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.004,
+    g: 0.002,
+    b: 0.002,
+    a: 1.0,
+};
+
+pub struct Renderer {
+    globals: wgpu::Buffer,
+    globals_group: wgpu::BindGroup,
+    material_layout: wgpu::BindGroupLayout,
+    block_layout: wgpu::BindGroupLayout,
+    samplers: [wgpu::Sampler; 3],
+    block_sampler: wgpu::Sampler,
+    opaque: wgpu::RenderPipeline,
+    blended: wgpu::RenderPipeline,
+    wire: wgpu::RenderPipeline,
+    seam: wgpu::RenderPipeline,
+    cut: wgpu::RenderPipeline,
+}
+
+fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture_entry(
+    binding: u32,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: dimension,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    }
+}
+
+fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        address_mode_u: mode,
+        address_mode_v: mode,
+        address_mode_w: mode,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        anisotropy_clamp: 1,
+        ..Default::default()
+    })
+}
+
+/// Facet shader and cut shader sources. The cut shader includes the
+/// block sampler the library ships for simulators, so both draw cuts the
+/// same way.
+pub(crate) fn shader_sources() -> [String; 2] {
+    [
+        include_str!("facet.wgsl").to_string(),
+        format!(
+            "{}\n{}",
+            crate::solid::SAMPLE_BLOCK_WGSL,
+            include_str!("cut.wgsl")
+        ),
+    ]
+}
+
+impl Renderer {
+    pub fn new(device: &wgpu::Device) -> Renderer {
+        let [facet_src, cut_src] = shader_sources();
+        let facet = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("facet.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(facet_src.into()),
+        });
+        let cut_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("cut.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(cut_src.into()),
+        });
+        let globals_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("globals"),
+            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("material"),
+            entries: &[
+                uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
+                texture_entry(1, wgpu::TextureViewDimension::D2),
+                sampler_entry(2),
+                texture_entry(3, wgpu::TextureViewDimension::D2),
+                sampler_entry(4),
+            ],
+        });
+        let block_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("block"),
+            entries: &[
+                texture_entry(0, wgpu::TextureViewDimension::D3),
+                sampler_entry(1),
+                uniform_entry(2, wgpu::ShaderStages::VERTEX_FRAGMENT),
+            ],
+        });
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: 4 * 28,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let globals_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &globals_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
+        });
+        let facet_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("facet"),
+            bind_group_layouts: &[Some(&globals_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
+        let cut_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("cut"),
+            bind_group_layouts: &[Some(&globals_layout), Some(&block_layout)],
+            immediate_size: 0,
+        });
+        let attributes = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32, 4 => Float32x4, 5 => Float32
+        ];
+        let facet_vertices = [Some(wgpu::VertexBufferLayout {
+            array_stride: (VERTEX_FLOATS * 4) as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        })];
+        let cut_attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let cut_vertices = [Some(wgpu::VertexBufferLayout {
+            array_stride: 24,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &cut_attributes,
+        })];
+        let pipeline = |label: &str,
+                        layout: &wgpu::PipelineLayout,
+                        module: &wgpu::ShaderModule,
+                        (vs, fs): (&str, &str),
+                        buffers: &[Option<wgpu::VertexBufferLayout>],
+                        topology: wgpu::PrimitiveTopology,
+                        blend: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    // Blend layers lie over their facets; they must not
+                    // hide each other.
+                    depth_write_enabled: Some(!blend),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: COLOUR_FORMAT,
+                        blend: blend.then_some(wgpu::BlendState::ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let tri = wgpu::PrimitiveTopology::TriangleList;
+        let line = wgpu::PrimitiveTopology::LineList;
+        Renderer {
+            opaque: pipeline(
+                "opaque",
+                &facet_layout,
+                &facet,
+                ("vs_main", "fs_main"),
+                &facet_vertices,
+                tri,
+                false,
+            ),
+            blended: pipeline(
+                "blended",
+                &facet_layout,
+                &facet,
+                ("vs_main", "fs_main"),
+                &facet_vertices,
+                tri,
+                true,
+            ),
+            wire: pipeline(
+                "wire",
+                &facet_layout,
+                &facet,
+                ("vs_line", "fs_wire"),
+                &facet_vertices,
+                line,
+                false,
+            ),
+            seam: pipeline(
+                "seam",
+                &facet_layout,
+                &facet,
+                ("vs_line", "fs_seam"),
+                &facet_vertices,
+                line,
+                false,
+            ),
+            cut: pipeline(
+                "cut",
+                &cut_layout,
+                &cut_module,
+                ("vs_cut", "fs_cut"),
+                &cut_vertices,
+                tri,
+                false,
+            ),
+            globals,
+            globals_group,
+            material_layout,
+            block_layout,
+            samplers: [
+                sampler(device, wgpu::AddressMode::Repeat),
+                sampler(device, wgpu::AddressMode::MirrorRepeat),
+                sampler(device, wgpu::AddressMode::ClampToEdge),
+            ],
+            // The block tiles space (sample_block.wgsl).
+            block_sampler: sampler(device, wgpu::AddressMode::Repeat),
+        }
+    }
+
+    pub(super) fn material_bind_group(
+        &self,
+        device: &wgpu::Device,
+        uniform: &wgpu::Buffer,
+        colour: &wgpu::TextureView,
+        wrap: Wrap,
+        normal: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let sampler = &self.samplers[match wrap {
+            Wrap::Repeat => 0,
+            Wrap::Mirrored => 1,
+            Wrap::Clamp => 2,
+        }];
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("material"),
+            layout: &self.material_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(colour),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(normal),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.samplers[0]),
+                },
+            ],
+        })
+    }
+
+    pub(super) fn block_bind_group(
+        &self,
+        device: &wgpu::Device,
+        block: &wgpu::TextureView,
+        placement: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("block"),
+            layout: &self.block_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(block),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&self.block_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: placement.as_entire_binding(),
+                },
+            ],
+        })
+    }
+
+    /// Draw `scene` as `view` shows it into `colour` and `depth`
+    /// (`size` pixels), recorded into `encoder`.
+    pub fn render(
+        &self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        (colour, depth): (&wgpu::TextureView, &wgpu::TextureView),
+        size: [u32; 2],
+        scene: &GpuScene,
+        view: &View,
+    ) {
+        let cam = &view.camera;
+        let aspect = size[0] as f64 / size[1].max(1) as f64;
+        let mut g = [0.0f32; 28];
+        g[..16].copy_from_slice(&cam.view_proj(aspect).to_cols_array());
+        let eye = cam.eye();
+        g[16..19].copy_from_slice(&eye.as_vec3().to_array());
+        g[19] = cam.distance as f32;
+        if let Some((n, d)) = view.clip {
+            g[20..23].copy_from_slice(&n.as_vec3().to_array());
+            g[23] = d as f32;
+        }
+        g[24] = if view.layers.bump { 1.0 } else { 0.0 };
+        g[25] = if view.layers.heat { 1.0 } else { 0.0 };
+        queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(&g));
+
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("scene"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(BACKGROUND),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.globals_group, &[]);
+        let layers = &view.layers;
+        let shown = |layer: Option<LayerKind>| match layer {
+            None => true,
+            Some(LayerKind::Ring | LayerKind::Band) => layers.seam_blend && !layers.heat,
+            Some(LayerKind::Overlay) => layers.overlay && !layers.heat,
+            Some(LayerKind::BandOverlay) => layers.overlay && layers.seam_blend && !layers.heat,
+        };
+        // Opaque first, then the blend layers in the list's order (the
+        // compositor's stacking).
+        for blend in [false, true] {
+            pass.set_pipeline(if blend { &self.blended } else { &self.opaque });
+            for p in &scene.primitives {
+                let m = &scene.materials[p.material];
+                if m.blend != blend || !shown(p.layer) {
+                    continue;
+                }
+                pass.set_bind_group(1, &m.bind_group, &[]);
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                pass.set_index_buffer(p.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..p.index_count, 0, 0..1);
+            }
+        }
+        for (on, pipeline) in [(layers.wireframe, &self.wire), (layers.seams, &self.seam)] {
+            if !on {
+                continue;
+            }
+            pass.set_pipeline(pipeline);
+            for p in scene.primitives.iter().filter(|p| p.layer.is_none()) {
+                pass.set_bind_group(1, &scene.materials[p.material].bind_group, &[]);
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                let (buffer, count) = if std::ptr::eq(pipeline, &self.wire) {
+                    (&p.edges, p.edge_count)
+                } else {
+                    (&p.seams, p.seam_count)
+                };
+                pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..count, 0, 0..1);
+            }
+        }
+        if let (Some(cut), Some(block)) = (&scene.cut, &scene.block) {
+            pass.set_pipeline(&self.cut);
+            pass.set_bind_group(1, &block.bind_group, &[]);
+            pass.set_vertex_buffer(0, cut.vertices.slice(..));
+            pass.set_index_buffer(cut.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..cut.index_count, 0, 0..1);
+        }
+    }
+}
+
+/// A colour and depth target of a fixed size, readable as an image.
+pub struct Offscreen {
+    pub size: [u32; 2],
+    pub colour: wgpu::Texture,
+    pub colour_view: wgpu::TextureView,
+    /// The same pixels seen as plain bytes, for egui, which takes its
+    /// textures' values as sRGB-encoded (a sRGB view would decode them
+    /// and the window would show the picture too dark).
+    pub display_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+}
+
+impl Offscreen {
+    pub fn new(device: &wgpu::Device, size: [u32; 2]) -> Offscreen {
+        let extent = wgpu::Extent3d {
+            width: size[0].max(1),
+            height: size[1].max(1),
+            depth_or_array_layers: 1,
+        };
+        let texture = |format, usage, view_formats: &[wgpu::TextureFormat]| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("offscreen"),
+                size: extent,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats,
+            })
+        };
+        let colour = texture(
+            COLOUR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+            &[wgpu::TextureFormat::Rgba8Unorm],
+        );
+        let depth = texture(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT, &[]);
+        Offscreen {
+            size: [extent.width, extent.height],
+            colour_view: colour.create_view(&Default::default()),
+            display_view: colour.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(wgpu::TextureFormat::Rgba8Unorm),
+                ..Default::default()
+            }),
+            colour,
+            depth_view: depth.create_view(&Default::default()),
+        }
+    }
+
+    /// Draw a frame into this target and submit it.
+    pub fn draw(
+        &self,
+        renderer: &Renderer,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &GpuScene,
+        view: &View,
+    ) {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        renderer.render(
+            queue,
+            &mut encoder,
+            (&self.colour_view, &self.depth_view),
+            self.size,
+            scene,
+            view,
+        );
+        queue.submit([encoder.finish()]);
+    }
+
+    /// The target's pixels (sRGB, as a PNG stores them).
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<image::RgbaImage> {
+        let [w, h] = self.size;
+        // Rows of a texture-to-buffer copy are padded to 256 bytes.
+        let row = (4 * w).div_ceil(256) * 256;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (row * h) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            self.colour.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        queue.submit([encoder.finish()]);
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+        rx.recv()
+            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?
+            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+        let mut pixels = Vec::with_capacity((4 * w * h) as usize);
+        for y in 0..h as usize {
+            pixels.extend_from_slice(&data[y * row as usize..y * row as usize + 4 * w as usize]);
+        }
+        drop(data);
+        buffer.unmap();
+        Ok(image::RgbaImage::from_raw(w, h, pixels).expect("sized"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The shaders parse and validate (naga, as wgpu does), so a mistake
+    /// fails here and not in a user's window.
+    #[test]
+    fn shaders_validate() {
+        for src in super::shader_sources() {
+            let module = naga::front::wgsl::parse_str(&src)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::default(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        }
+    }
+}

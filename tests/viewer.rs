@@ -1,0 +1,239 @@
+//! The clinician's flow through the viewer, driven by egui_kittest with
+//! its wgpu renderer (the software adapter in CI): open the bundled
+//! scene, select a facet, pick a tissue, unwrap, drag the texture, move
+//! the cut plane; and bad input shown in the window.
+
+use std::time::{Duration, Instant};
+
+use eframe::egui;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use organtex::app::{Mode, Options, Viewer};
+
+fn repo(p: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+fn viewer(open: Option<std::path::PathBuf>) -> Harness<'static, Viewer> {
+    Harness::builder()
+        .with_size([1280.0, 800.0])
+        .wgpu()
+        .build_eframe(move |cc| {
+            Viewer::new(
+                cc,
+                Options {
+                    open,
+                    ..Options::default()
+                },
+            )
+            .expect("a viewer on the harness's wgpu device")
+        })
+}
+
+/// Step frames until no job runs; returns how many frames were drawn
+/// meanwhile (the UI never waits for a job).
+fn settle(h: &mut Harness<'static, Viewer>) -> usize {
+    let start = Instant::now();
+    let mut frames = 0;
+    while h.state().busy() {
+        h.step();
+        frames += 1;
+        std::thread::sleep(Duration::from_millis(20));
+        assert!(
+            start.elapsed() < Duration::from_secs(600),
+            "a job never ended"
+        );
+    }
+    h.run_steps(3);
+    frames
+}
+
+/// Drag with the primary button from `from` by `by` points.
+fn drag(
+    h: &mut Harness<'static, Viewer>,
+    from: egui::Pos2,
+    by: egui::Vec2,
+    modifiers: egui::Modifiers,
+) {
+    let press = |pressed, pos| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers,
+    };
+    h.input_mut()
+        .events
+        .push(egui::Event::ModifiersChanged(modifiers));
+    h.input_mut().events.push(egui::Event::PointerMoved(from));
+    h.input_mut().events.push(press(true, from));
+    h.step();
+    for i in 1..=4 {
+        h.input_mut()
+            .events
+            .push(egui::Event::PointerMoved(from + by * (i as f32 / 4.0)));
+        h.step();
+    }
+    h.input_mut().events.push(press(false, from + by));
+    h.step();
+    h.input_mut()
+        .events
+        .push(egui::Event::ModifiersChanged(Default::default()));
+    h.step();
+}
+
+#[test]
+fn the_clinician_flow() {
+    let mut h = viewer(Some(repo("scenes/hysteroscopy_myomas.toml")));
+    // Opening a scene unwraps it at once, frames coming all along.
+    let frames = settle(&mut h);
+    assert!(
+        frames > 5,
+        "frames kept coming while loading and unwrapping ({frames})"
+    );
+    assert!(h.state().doc.as_ref().is_some_and(|d| d.baked.is_some()));
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+
+    h.get_by_label("uterus / myoma-front").click();
+    h.run_steps(2);
+    assert_eq!(h.state().selected, Some((0, 1)));
+
+    h.get_by_label("Gravel").click();
+    settle(&mut h);
+    let doc = h.state().doc.as_ref().unwrap();
+    assert_eq!(doc.settings((0, 1)).texture, "gravel");
+
+    // Unwrap again: the UI keeps drawing while it runs.
+    h.get_by_label("Unwrap").click();
+    h.step();
+    assert!(h.state().busy(), "the unwrap runs in the background");
+    let frames = settle(&mut h);
+    assert!(
+        frames > 2,
+        "frames kept coming during the unwrap ({frames})"
+    );
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+
+    // Texture visible: the organ's pixels vary.
+    let shot = h.state().read_scene().unwrap();
+    let lum: Vec<f64> = shot
+        .pixels()
+        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0)
+        .filter(|&l| l > 12.0)
+        .collect();
+    let mean = lum.iter().sum::<f64>() / lum.len() as f64;
+    let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
+    assert!(
+        lum.len() > 10_000 && var > 50.0,
+        "texture visible: {} pixels, variance {var:.1}",
+        lum.len()
+    );
+
+    // Drag the texture: only the transform changes, nothing is uploaded.
+    h.get_by_label("Texture").click();
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Texture);
+    let uploads = h.state().uploads;
+    let before = h.state().doc.as_ref().unwrap().settings((0, 1)).clone();
+    let centre = egui::pos2(870.0, 420.0);
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(60.0, 30.0),
+        egui::Modifiers::NONE,
+    );
+    let moved = h.state().doc.as_ref().unwrap().settings((0, 1)).clone();
+    assert_ne!(moved.offset, before.offset, "the drag moved the texture");
+    assert_eq!(moved.rotation, before.rotation);
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(40.0, 0.0),
+        egui::Modifiers::SHIFT,
+    );
+    let turned = h.state().doc.as_ref().unwrap().settings((0, 1)).clone();
+    assert!(
+        (turned.rotation - before.rotation).abs() > 1.0,
+        "shift-drag turned the texture"
+    );
+    assert_eq!(
+        h.state().uploads,
+        uploads,
+        "a texture drag uploads no mesh data"
+    );
+
+    // The cut plane: the interior block is made in the background, then
+    // the section is drawn and follows the slider.
+    h.get_by_label("cut plane").click();
+    h.step();
+    assert!(h.state().cut.on, "the checkbox turned the cut on");
+    settle(&mut h);
+    assert!(
+        h.state().cut_triangles() > 0,
+        "the section is drawn: {:?} {:?}",
+        h.state().cut,
+        h.state().message
+    );
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+    let with_cut = h.state().read_scene().unwrap();
+    // Ctrl-drag moves the plane.
+    let at = h.state().cut.at;
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(150.0, -100.0),
+        egui::Modifiers::COMMAND,
+    );
+    assert_ne!(h.state().cut.at, at, "ctrl-drag moved the cut plane");
+    h.run_steps(2);
+    let moved_cut = h.state().read_scene().unwrap();
+    let changed = with_cut
+        .pixels()
+        .zip(moved_cut.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 1000,
+        "moving the cut plane changes the picture ({changed} pixels)"
+    );
+    assert!(h.state().cut_triangles() > 0, "the section is drawn");
+
+    // The whole window renders through egui's wgpu renderer.
+    let window = h.render().expect("the harness renders the window");
+    assert_eq!((window.width(), window.height()), (1280, 800));
+}
+
+#[test]
+fn a_broken_mesh_shows_a_message_and_keeps_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let broken = dir.path().join("broken.obj");
+    std::fs::write(&broken, "v 0 0 0\nv 1 0 0\nf 1 2 7\n").unwrap();
+    let mut h = viewer(Some(repo("tests/data/cube.obj")));
+    settle(&mut h);
+    let name = h.state().doc.as_ref().unwrap().spec.name.clone();
+    h.state_mut().open(broken);
+    settle(&mut h);
+    let m = h.state().message.clone().expect("a message");
+    assert!(m.error && m.text.contains("broken.obj"), "{m:?}");
+    h.get_by_label_contains("broken.obj");
+    assert_eq!(
+        h.state().doc.as_ref().unwrap().spec.name,
+        name,
+        "the cube is still open"
+    );
+
+    // A scene whose tissue texture is missing.
+    let scene = dir.path().join("missing.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[[node]]\nname = \"cube\"\nmesh.file = \"{}\"\n[[node.facet]]\nname = \"*\"\ntexture = \"no-such-tissue\"\n",
+            repo("tests/data/cube.obj").display()
+        ),
+    )
+    .unwrap();
+    h.state_mut().open(scene);
+    settle(&mut h);
+    let m = h.state().message.clone().expect("a message");
+    assert!(m.error && m.text.contains("no-such-tissue"), "{m:?}");
+    assert_eq!(h.state().doc.as_ref().unwrap().spec.name, name);
+}

@@ -275,7 +275,7 @@ fn frame_step(root: &Path) -> Result<Step> {
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list)?;
     let target = Offscreen::new(&gpu.device, [960, 720]);
     let view = View {
-        camera: crate::render::scene_camera(&baked, scene.bounds),
+        camera: crate::render::OrbitCamera::for_scene(&spec.cameras, scene.bounds),
         layers: Layers::default(),
         clip: None,
     };

@@ -2,6 +2,8 @@
 //! the software one, llvmpipe, from mesa-vulkan-drivers). No adapter is a
 //! failure, not a skip.
 
+mod common;
+use common::lit_pixels;
 use glam::DVec3;
 use organtex::progress::Silent;
 use organtex::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
@@ -19,20 +21,6 @@ fn gpu() -> Gpu {
     Gpu::headless().expect("a GPU adapter (install mesa-vulkan-drivers)")
 }
 
-/// Mean and variance of luminance over the pixels that are not the
-/// background, and how many there are.
-fn lit_pixels(img: &image::RgbaImage) -> (f64, f64, usize) {
-    let lum: Vec<f64> = img
-        .pixels()
-        .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
-        .filter(|&l| l > 12.0)
-        .collect();
-    let n = lum.len().max(1) as f64;
-    let mean = lum.iter().sum::<f64>() / n;
-    let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n;
-    (mean, var, lum.len())
-}
-
 #[test]
 fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
     let gpu = gpu();
@@ -42,7 +30,7 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
     let renderer = Renderer::new(&gpu.device);
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list).unwrap();
     let target = Offscreen::new(&gpu.device, [320, 240]);
-    let camera = organtex::render::scene_camera(&baked, scene.bounds);
+    let camera = OrbitCamera::for_scene(&spec.cameras, scene.bounds);
     let draw = |layers: Layers| {
         let view = View {
             camera,
@@ -53,7 +41,7 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
         target.read(&gpu.device, &gpu.queue).unwrap()
     };
     let full = draw(Layers::default());
-    let (_, var, n) = lit_pixels(&full);
+    let (n, _, var) = lit_pixels(&full);
     assert!(
         n > 320 * 240 / 2,
         "the organ fills the view from its camera ({n} lit pixels)"

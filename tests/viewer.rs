@@ -3,7 +3,10 @@
 //! scene, select a facet, pick a tissue, unwrap, drag the texture, move
 //! the cut plane; and bad input shown in the window.
 
+mod common;
 use std::time::{Duration, Instant};
+
+use common::lit_pixels;
 
 use eframe::egui;
 use egui_kittest::Harness;
@@ -115,17 +118,10 @@ fn the_clinician_flow() {
 
     // Texture visible: the organ's pixels vary.
     let shot = h.state().read_scene().unwrap();
-    let lum: Vec<f64> = shot
-        .pixels()
-        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0)
-        .filter(|&l| l > 12.0)
-        .collect();
-    let mean = lum.iter().sum::<f64>() / lum.len() as f64;
-    let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
+    let (lit, _, var) = lit_pixels(&shot);
     assert!(
-        lum.len() > 10_000 && var > 50.0,
-        "texture visible: {} pixels, variance {var:.1}",
-        lum.len()
+        lit > 10_000 && var > 50.0,
+        "texture visible: {lit} pixels, variance {var:.1}"
     );
 
     // Drag the texture: only the transform changes, nothing is uploaded.

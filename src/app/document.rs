@@ -33,12 +33,20 @@ impl Document {
         let is_scene = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-        let spec = if is_scene {
-            file::load(path)?
-        } else {
-            bare_mesh_scene(path)?
-        };
-        Document::of_spec(spec)
+        if is_scene {
+            return Document::of_spec(file::load(path)?);
+        }
+        let mut doc = Document::of_spec(bare_mesh_scene(path)?)?;
+        // Tiles a sixth of the bounding box's diagonal, so a few copies of
+        // the texture cover the mesh whatever its units.
+        if let Some((lo, hi)) = doc.bounds() {
+            let tile = ((hi - lo).length() / 6.0).max(1e-9);
+            for f in &mut doc.spec.nodes[0].facets {
+                f.tile_size = tile;
+                f.overlay_tile_size = tile;
+            }
+        }
+        Ok(doc)
     }
 
     /// Read every node's mesh and give each of its facets its own
@@ -154,7 +162,8 @@ fn absolute(p: &Path) -> PathBuf {
 }
 
 /// A scene of one node, the mesh at `path`, every facet the bundled
-/// database's first colour tissue.
+/// database's first colour tissue (tile sizes are set by `open`, once the
+/// mesh is read).
 fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
     let known = path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
         crate::mesh::io::READABLE
@@ -185,7 +194,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
         file: path.to_path_buf(),
         line: 0,
     };
-    Ok(size_tiles(SceneSpec {
+    Ok(SceneSpec {
         path: path.to_path_buf(),
         name: name.clone(),
         database,
@@ -196,13 +205,13 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
             facets: vec![FacetSettings {
                 name: "*".into(),
                 texture,
-                tile_size: 0.0,
+                tile_size: 1.0,
                 rotation: 0.0,
                 offset: [0.0, 0.0],
                 bump: 0.0,
                 overlay: None,
                 overlay_opacity: 0.6,
-                overlay_tile_size: 0.0,
+                overlay_tile_size: 1.0,
                 overlap: 0.0,
                 origin: origin.clone(),
             }],
@@ -210,24 +219,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
             origin,
         }],
         bake: BakeSettings::default(),
-    }))
-}
-
-/// A bare mesh's tiles: a sixth of its bounding box's diagonal, so a few
-/// copies of the texture cover it whatever its units.
-fn size_tiles(mut spec: SceneSpec) -> SceneSpec {
-    if let Some(node) = spec.nodes.first_mut()
-        && let MeshSpec::File(path) = &node.mesh
-        && let Ok(mesh) = crate::mesh::io::read(path)
-        && let Some((lo, hi)) = mesh.bounding_box()
-    {
-        let tile = ((hi - lo).length() / 6.0).max(1e-9);
-        for f in &mut node.facets {
-            f.tile_size = tile;
-            f.overlay_tile_size = tile;
-        }
-    }
-    spec
+    })
 }
 
 #[derive(Serialize)]

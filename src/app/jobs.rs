@@ -32,6 +32,34 @@ impl Progress for Shared {
     }
 }
 
+/// A job seen from the status bar, whatever it returns.
+pub trait Running {
+    /// "what: stage", and the fraction of the stage done (None: unknown).
+    fn status(&self) -> (String, Option<f32>);
+    fn cancel(&self);
+}
+
+impl<T> Running for Job<T> {
+    fn status(&self) -> (String, Option<f32>) {
+        let total = self.shared.total.load(Ordering::Relaxed);
+        let done = self.shared.done.load(Ordering::Relaxed);
+        let stage = self.shared.stage.lock().expect("not poisoned").clone();
+        let what = if stage.is_empty() {
+            self.what.clone()
+        } else {
+            format!("{}: {stage}", self.what)
+        };
+        (
+            what,
+            (total > 0).then(|| (done as f32 / total as f32).min(1.0)),
+        )
+    }
+
+    fn cancel(&self) {
+        self.shared.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
 pub struct Job<T> {
     /// What the job does, for the status bar.
     pub what: String,
@@ -59,21 +87,6 @@ impl<T: Send + 'static> Job<T> {
             shared,
             handle: Some(handle),
         }
-    }
-
-    /// The current stage and the fraction of it done (None: unknown).
-    pub fn progress(&self) -> (String, Option<f32>) {
-        let total = self.shared.total.load(Ordering::Relaxed);
-        let done = self.shared.done.load(Ordering::Relaxed);
-        let stage = self.shared.stage.lock().expect("not poisoned").clone();
-        (
-            stage,
-            (total > 0).then(|| (done as f32 / total as f32).min(1.0)),
-        )
-    }
-
-    pub fn cancel(&self) {
-        self.shared.cancel.store(true, Ordering::Relaxed);
     }
 
     /// The result, once the job has ended.

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use super::document::Document;
 use super::file_dialog::{FileDialog, Outcome, Purpose};
-use super::jobs::Job;
+use super::jobs::{Job, Running};
 use crate::error::{Error, Result};
 use crate::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
 use crate::scene::build::{BakedScene, Tissues, ensure_tissues};
@@ -79,46 +79,16 @@ struct Jobs {
 }
 
 impl Jobs {
-    /// What runs, with the fraction of its stage done.
-    fn busy(&self) -> Vec<(String, Option<f32>)> {
-        let mut out = Vec::new();
-        macro_rules! add {
-            ($j:expr) => {
-                if let Some(j) = &$j {
-                    let (stage, f) = j.progress();
-                    let what = if stage.is_empty() {
-                        j.what.clone()
-                    } else {
-                        format!("{}: {stage}", j.what)
-                    };
-                    out.push((what, f));
-                }
-            };
-        }
-        add!(self.open);
-        add!(self.unwrap);
-        add!(self.tissues);
-        add!(self.block);
-        add!(self.bake);
-        out
-    }
-
-    fn cancel_all(&self) {
-        if let Some(j) = &self.open {
-            j.cancel();
-        }
-        if let Some(j) = &self.unwrap {
-            j.cancel();
-        }
-        if let Some(j) = &self.tissues {
-            j.cancel();
-        }
-        if let Some(j) = &self.block {
-            j.cancel();
-        }
-        if let Some(j) = &self.bake {
-            j.cancel();
-        }
+    /// The jobs the status bar shows (thumbnails load unannounced).
+    fn shown(&self) -> Vec<&dyn Running> {
+        let jobs: [Option<&dyn Running>; 5] = [
+            self.open.as_ref().map(|j| j as &dyn Running),
+            self.unwrap.as_ref().map(|j| j as &dyn Running),
+            self.tissues.as_ref().map(|j| j as &dyn Running),
+            self.block.as_ref().map(|j| j as &dyn Running),
+            self.bake.as_ref().map(|j| j as &dyn Running),
+        ];
+        jobs.into_iter().flatten().collect()
     }
 }
 
@@ -138,7 +108,6 @@ pub struct Viewer {
     pub selected: Option<(usize, usize)>,
     pub mode: Mode,
     pub cut: CutPlane,
-    block: Option<(usize, Placement)>,
     /// The cut plane the section was last made for.
     cut_made: Option<(usize, f64)>,
     pub message: Option<Message>,
@@ -148,7 +117,7 @@ pub struct Viewer {
     dirty: bool,
     opts: Options,
     frames_left: Option<usize>,
-    screenshot_result: Arc<Mutex<Option<Result<()>>>>,
+    screenshot_result: ScreenshotSlot,
     pub frame_times: Vec<f64>,
     last_frame: Option<Instant>,
     ctx: egui::Context,
@@ -190,7 +159,6 @@ impl Viewer {
                 axis: 0,
                 at: 0.5,
             },
-            block: None,
             cut_made: None,
             message: None,
             tissues: Vec::new(),
@@ -216,7 +184,7 @@ impl Viewer {
 
     /// Whether any job is running.
     pub fn busy(&self) -> bool {
-        !self.jobs.busy().is_empty() || self.jobs.thumbnails.is_some()
+        !self.jobs.shown().is_empty() || self.jobs.thumbnails.is_some()
     }
 
     pub fn adapter(&self) -> &str {
@@ -348,18 +316,13 @@ impl Viewer {
             match r {
                 Ok(doc) => {
                     let is_scene = doc.spec.path.extension().is_some_and(|e| e == "toml");
-                    let bounds = doc.bounds();
-                    let (lo, hi) = bounds.unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
-                    self.camera = match doc.spec.cameras.first() {
-                        Some(c) => OrbitCamera::from_scene(c, (hi - lo).length() / 2.0),
-                        None => OrbitCamera::fit(lo, hi),
-                    };
+                    self.camera = OrbitCamera::for_scene(&doc.spec.cameras, doc.bounds());
                     self.jobs.unwrap = None;
                     self.jobs.tissues = None;
                     let db = doc.spec.database.clone();
                     self.doc = Some(doc);
                     self.selected = Some((0, 0));
-                    self.block = None;
+                    // A new scene starts without the old interior block.
                     self.scene = None;
                     self.cut.on = false;
                     self.message = None;
@@ -491,9 +454,13 @@ impl Viewer {
                 &placement,
             );
         }
-        self.block = Some((volume.size[0], placement));
         self.cut_made = None;
         self.dirty = true;
+    }
+
+    /// Whether the interior block is on the GPU.
+    fn has_block(&self) -> bool {
+        self.scene.as_ref().is_some_and(GpuScene::has_block)
     }
 
     /// Turn the cut plane on; the first time, synthesise the interior.
@@ -501,7 +468,7 @@ impl Viewer {
         self.cut.on = on;
         self.cut_made = None;
         self.dirty = true;
-        if !on || self.block.is_some() || self.jobs.block.is_some() {
+        if !on || self.has_block() || self.jobs.block.is_some() {
             return;
         }
         let Some(doc) = &self.doc else { return };
@@ -551,7 +518,7 @@ impl Viewer {
 
     /// Remake the section when the plane moved.
     fn update_section(&mut self) {
-        let plane = self.cut_plane().filter(|_| self.block.is_some());
+        let plane = self.cut_plane().filter(|_| self.has_block());
         let key = plane.map(|(_, d)| (self.cut.axis, d));
         if key == self.cut_made {
             return;
@@ -623,7 +590,7 @@ impl Viewer {
             let view = View {
                 camera: self.camera,
                 layers: self.layers,
-                clip: self.cut_plane().filter(|_| self.block.is_some()),
+                clip: self.cut_plane().filter(|_| self.has_block()),
             };
             target.draw(
                 &self.renderer,
@@ -715,19 +682,20 @@ impl Viewer {
                 self.bake();
             }
             ui.separator();
-            let busy = self.jobs.busy();
-            for (what, fraction) in &busy {
+            let running = self.jobs.shown();
+            for job in &running {
+                let (what, fraction) = job.status();
                 let bar = egui::ProgressBar::new(fraction.unwrap_or(0.0))
                     .desired_width(160.0)
-                    .text(what.clone());
+                    .text(what);
                 ui.add(if fraction.is_none() {
                     bar.animate(true)
                 } else {
                     bar
                 });
             }
-            if !busy.is_empty() && ui.button("Cancel").clicked() {
-                self.jobs.cancel_all();
+            if !running.is_empty() && ui.button("Cancel").clicked() {
+                running.iter().for_each(|j| j.cancel());
             }
             if let Some(m) = &self.message {
                 let colour = if m.error {

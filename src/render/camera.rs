@@ -35,6 +35,16 @@ impl OrbitCamera {
         }
     }
 
+    /// The camera a scene opens with: its first camera, else a view of
+    /// the whole of `bounds`.
+    pub fn for_scene(cameras: &[Camera], bounds: Option<(DVec3, DVec3)>) -> OrbitCamera {
+        let (lo, hi) = bounds.unwrap_or((DVec3::splat(-1.0), DVec3::splat(1.0)));
+        match cameras.first() {
+            Some(c) => OrbitCamera::from_scene(c, (hi - lo).length() / 2.0),
+            None => OrbitCamera::fit(lo, hi),
+        }
+    }
+
     /// The scene file's camera, `radius` the scene's size.
     pub fn from_scene(camera: &Camera, radius: f64) -> OrbitCamera {
         let eye = DVec3::from_array(camera.position);

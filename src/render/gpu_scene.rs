@@ -414,6 +414,10 @@ impl GpuScene {
         self.block = Some(GpuBlock { bind_group });
     }
 
+    pub fn has_block(&self) -> bool {
+        self.block.is_some()
+    }
+
     pub fn cut_triangles(&self) -> usize {
         self.cut.as_ref().map_or(0, |c| c.index_count as usize / 3)
     }

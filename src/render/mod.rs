@@ -19,5 +19,5 @@ mod renderer;
 pub use camera::OrbitCamera;
 pub use gpu::Gpu;
 pub use gpu_scene::{CutMesh, GpuScene};
-pub use preview::{preview, scene_camera};
+pub use preview::preview;
 pub use renderer::{Layers, Offscreen, Renderer, View};

@@ -6,16 +6,6 @@ use crate::error::Result;
 use crate::scene::build::BakedScene;
 use crate::scene::draw::DrawList;
 
-/// The camera a scene opens with: its first camera, else a view of the
-/// whole of `bounds`.
-pub fn scene_camera(scene: &BakedScene, bounds: Option<(glam::DVec3, glam::DVec3)>) -> OrbitCamera {
-    let (lo, hi) = bounds.unwrap_or((glam::DVec3::splat(-1.0), glam::DVec3::splat(1.0)));
-    match scene.spec.cameras.first() {
-        Some(c) => OrbitCamera::from_scene(c, (hi - lo).length() / 2.0),
-        None => OrbitCamera::fit(lo, hi),
-    }
-}
-
 /// `scene` drawn from its camera, `size` pixels, every layer on.
 pub fn preview(
     gpu: &Gpu,
@@ -26,7 +16,7 @@ pub fn preview(
     let renderer = Renderer::new(&gpu.device);
     let gpu_scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, list)?;
     let view = View {
-        camera: scene_camera(scene, gpu_scene.bounds),
+        camera: OrbitCamera::for_scene(&scene.spec.cameras, gpu_scene.bounds),
         layers: Layers::default(),
         clip: None,
     };

@@ -159,7 +159,7 @@ pub fn bake(
     let t = Instant::now();
     progress.stage("writing", 2);
     let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
-    let glb = gltf::encode_list(&list, &spec.name)?;
+    let glb = gltf::encode(&list, &spec.name)?;
     progress.advance(1);
     // The preview goes through the viewer's renderer; a machine with no
     // GPU adapter at all (not even a software one) gets the bake without

@@ -13,8 +13,6 @@ use glam::{DVec2, DVec3};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 
-use super::atlas::Atlas;
-use super::build::BakedScene;
 use super::composite::Transform;
 use super::draw::{DrawList, Material, Part, Primitive, Stream, TextureRef, Wrap};
 use crate::error::{Error, Result};
@@ -359,7 +357,7 @@ fn node(
 }
 
 /// The .glb bytes of `list` as scene `name`.
-pub fn encode_list(list: &DrawList, name: &str) -> Result<Vec<u8>> {
+pub fn encode(list: &DrawList, name: &str) -> Result<Vec<u8>> {
     let mut b = Builder::new();
     let mut materials = Vec::with_capacity(list.materials.len());
     for m in &list.materials {
@@ -386,12 +384,6 @@ pub fn encode_list(list: &DrawList, name: &str) -> Result<Vec<u8>> {
         b.root.extensions_used.push("KHR_texture_transform".into());
     }
     b.finish()
-}
-
-/// The .glb bytes of `scene`; with `atlases` (per node, per facet), in
-/// atlas mode.
-pub fn encode(scene: &BakedScene, atlases: Option<&[Vec<Atlas>]>) -> Result<Vec<u8>> {
-    encode_list(&DrawList::of(scene, atlases), &scene.spec.name)
 }
 
 /// The .glb bytes of one opaque mesh named `name`, textured with `texture`
@@ -427,5 +419,5 @@ pub fn textured_mesh(
             }],
         }],
     };
-    encode_list(&list, name)
+    encode(&list, name)
 }

@@ -1,4 +1,6 @@
-//! Helpers shared by the integration tests.
+//! Helpers shared by the integration tests. Each test file compiles this
+//! module on its own and uses only some of it.
+#![allow(dead_code)]
 
 use std::process::Command;
 
@@ -13,4 +15,18 @@ pub fn organtex(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+/// Luminance (mean of R, G, B) of the pixels brighter than the
+/// background, with their mean and variance.
+pub fn lit_pixels(img: &image::RgbaImage) -> (usize, f64, f64) {
+    let lum: Vec<f64> = img
+        .pixels()
+        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0)
+        .filter(|&l| l > 12.0)
+        .collect();
+    let n = lum.len().max(1) as f64;
+    let mean = lum.iter().sum::<f64>() / n;
+    let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n;
+    (lum.len(), mean, var)
 }

@@ -140,17 +140,23 @@ fn the_clinician_flow() {
     let moved = h.state().doc.as_ref().unwrap().settings((0, 1)).clone();
     assert_ne!(moved.offset, before.offset, "the drag moved the texture");
     assert_eq!(moved.rotation, before.rotation);
+    // Shift-drag turns it like a dial about the view's centre, whichever
+    // way the pointer goes.
     drag(
         &mut h,
-        centre,
-        egui::vec2(40.0, 0.0),
+        centre + egui::vec2(220.0, 0.0),
+        egui::vec2(0.0, 60.0),
         egui::Modifiers::SHIFT,
     );
     let turned = h.state().doc.as_ref().unwrap().settings((0, 1)).clone();
+    let swept = (60.0f64 / 220.0).atan().to_degrees();
     assert!(
-        (turned.rotation - before.rotation).abs() > 1.0,
-        "shift-drag turned the texture"
+        ((before.rotation - turned.rotation) - swept).abs() < 2.0,
+        "shift-drag turned the texture by the angle swept: {} -> {} ({swept:.1} swept)",
+        before.rotation,
+        turned.rotation
     );
+    assert_eq!(turned.offset, moved.offset);
     assert_eq!(
         h.state().uploads,
         uploads,
@@ -192,6 +198,27 @@ fn the_clinician_flow() {
         "moving the cut plane changes the picture ({changed} pixels)"
     );
     assert!(h.state().cut_triangles() > 0, "the section is drawn");
+
+    // Orbit away, then Home brings back the scene's camera.
+    let opened = h.state().camera.eye();
+    h.get_by_label("Camera").click();
+    h.run_steps(2);
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(-120.0, 40.0),
+        egui::Modifiers::NONE,
+    );
+    assert!(
+        (h.state().camera.eye() - opened).length() > 1.0,
+        "the drag orbited"
+    );
+    h.key_press(egui::Key::Home);
+    h.run_steps(2);
+    assert!(
+        (h.state().camera.eye() - opened).length() < 1e-9,
+        "Home reset the view"
+    );
 
     // The whole window renders through egui's wgpu renderer.
     let window = h.render().expect("the harness renders the window");

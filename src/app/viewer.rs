@@ -309,6 +309,14 @@ impl Viewer {
         self.dirty = true;
     }
 
+    /// Back to the camera the document opened with.
+    pub fn reset_view(&mut self) {
+        if let Some(doc) = &self.doc {
+            self.camera = OrbitCamera::for_scene(&doc.spec.cameras, doc.bounds());
+            self.dirty = true;
+        }
+    }
+
     /// Take finished jobs' results.
     fn poll_jobs(&mut self) {
         if let Some(r) = self.jobs.open.as_mut().and_then(Job::poll) {
@@ -316,11 +324,11 @@ impl Viewer {
             match r {
                 Ok(doc) => {
                     let is_scene = doc.spec.path.extension().is_some_and(|e| e == "toml");
-                    self.camera = OrbitCamera::for_scene(&doc.spec.cameras, doc.bounds());
                     self.jobs.unwrap = None;
                     self.jobs.tissues = None;
                     let db = doc.spec.database.clone();
                     self.doc = Some(doc);
+                    self.reset_view();
                     self.selected = Some((0, 0));
                     // A new scene starts without the old interior block.
                     self.scene = None;
@@ -654,10 +662,21 @@ impl Viewer {
         }));
     }
 
+    /// File dialogs start in the open document's folder (else the
+    /// working directory), so Save lands beside the scene it came from.
+    fn dialog_dir(&self) -> PathBuf {
+        let here = std::env::current_dir().unwrap_or_default();
+        self.doc
+            .as_ref()
+            .and_then(|d| d.spec.path.parent())
+            .and_then(|p| std::fs::canonicalize(here.join(p)).ok())
+            .unwrap_or(here)
+    }
+
     fn top_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             if ui.button("Open…").clicked() {
-                let dir = std::env::current_dir().unwrap_or_default();
+                let dir = self.dialog_dir();
                 self.dialog = Some(FileDialog::new(Purpose::Open, dir, String::new()));
             }
             let has_doc = self.doc.is_some();
@@ -665,7 +684,7 @@ impl Viewer {
                 .add_enabled(has_doc, egui::Button::new("Save…"))
                 .clicked()
             {
-                let dir = std::env::current_dir().unwrap_or_default();
+                let dir = self.dialog_dir();
                 let name = self
                     .doc
                     .as_ref()
@@ -838,6 +857,14 @@ impl Viewer {
                 .on_hover_text(
                     "drag: move · shift-drag: turn · wheel: scale the selected facet's texture",
                 );
+            if ui
+                .button("Reset view")
+                .on_hover_text("back to the scene's first camera (key: Home)")
+                .clicked()
+                || ui.input(|i| i.key_pressed(egui::Key::Home))
+            {
+                self.reset_view();
+            }
             if self.cut.on {
                 ui.label("ctrl-drag: move the cut plane");
             }
@@ -867,7 +894,12 @@ impl Viewer {
             {
                 let k = self.camera.units_per_pixel(height);
                 if shift {
-                    self.edit_texture(|s| s.rotation += d.0 * 0.5);
+                    let turn = dial_turn(
+                        response.rect.center(),
+                        response.interact_pointer_pos(),
+                        delta,
+                    );
+                    self.edit_texture(|s| s.rotation += turn);
                 } else {
                     self.edit_texture(|s| {
                         s.offset[0] -= d.0 * k / s.tile_size;
@@ -884,10 +916,12 @@ impl Viewer {
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y) as f64;
             if scroll != 0.0 {
+                // About 15% per wheel notch (80 points on X11).
+                let factor = (-scroll * WHEEL_RATE).exp();
                 if self.mode == Mode::Texture {
-                    self.edit_texture(|s| s.tile_size *= (-scroll * 0.002).exp());
+                    self.edit_texture(|s| s.tile_size *= factor);
                 } else {
-                    self.camera.zoom((-scroll * 0.002).exp());
+                    self.camera.zoom(factor);
                 }
                 self.dirty = true;
             }
@@ -975,6 +1009,25 @@ impl eframe::App for Viewer {
             ctx.request_repaint_after(std::time::Duration::from_millis(50));
         }
     }
+}
+
+/// Wheel zoom and texture scale per point of scroll.
+const WHEEL_RATE: f64 = 0.002;
+
+/// Degrees a shift-drag turns the texture: the angle the pointer sweeps
+/// about the view's centre, like turning a dial, so any direction of
+/// drag turns it; near the centre, where that angle jumps, the
+/// horizontal motion instead.
+fn dial_turn(centre: egui::Pos2, pointer: Option<egui::Pos2>, delta: egui::Vec2) -> f64 {
+    let Some(now) = pointer else {
+        return delta.x as f64 * 0.5;
+    };
+    let (a, b) = (now - delta - centre, now - centre);
+    if a.length() < 40.0 || b.length() < 40.0 {
+        return delta.x as f64 * 0.5;
+    }
+    let swept = (a.x * b.y - a.y * b.x).atan2(a.dot(b)) as f64;
+    -swept.to_degrees()
 }
 
 /// Every tissue's id, name and a 64-pixel thumbnail of its colour texture

@@ -260,3 +260,88 @@ fn a_broken_mesh_shows_a_message_and_keeps_the_scene() {
     assert!(m.error && m.text.contains("no-such-tissue"), "{m:?}");
     assert_eq!(h.state().doc.as_ref().unwrap().spec.name, name);
 }
+
+#[test]
+fn a_drag_draws_at_half_resolution_and_the_full_picture_follows() {
+    let mut h = viewer(Some(repo("tests/data/cube.obj")));
+    settle(&mut h);
+    let full = h.state().read_scene().unwrap().dimensions();
+    let at = egui::pos2(870.0, 420.0);
+    let press = |pressed, pos| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    h.input_mut().events.push(egui::Event::PointerMoved(at));
+    h.input_mut().events.push(press(true, at));
+    h.step();
+    let mut dragging = None;
+    for i in 1..=4 {
+        let p = at + egui::vec2(20.0 * i as f32, 0.0);
+        h.input_mut().events.push(egui::Event::PointerMoved(p));
+        h.step();
+        dragging = Some(h.state().read_scene().unwrap().dimensions());
+    }
+    let dragging = dragging.unwrap();
+    assert_eq!(
+        dragging,
+        (full.0.div_ceil(2), full.1.div_ceil(2)),
+        "while the mouse moves the view, the scene is drawn at half resolution"
+    );
+    h.input_mut()
+        .events
+        .push(press(false, at + egui::vec2(80.0, 0.0)));
+    h.run();
+    assert_eq!(
+        h.state().read_scene().unwrap().dimensions(),
+        full,
+        "once it stops, the full picture is drawn without more input"
+    );
+}
+
+#[test]
+fn saving_over_a_file_asks_first_and_writes_a_scene_that_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("cube.obj");
+    std::fs::copy(repo("tests/data/cube.obj"), &mesh).unwrap();
+    let existing = dir.path().join("scene.toml");
+    std::fs::write(&existing, "# mine\n").unwrap();
+    let mut h = viewer(Some(mesh));
+    settle(&mut h);
+
+    h.get_by_label("Save…").click();
+    h.run();
+    h.get_by_role(egui::accesskit::Role::TextInput).focus();
+    h.run_steps(1);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.get_by_role(egui::accesskit::Role::TextInput)
+        .type_text("scene.toml");
+    h.run_steps(2);
+    h.get_by_label("Save").click();
+    h.run_steps(2);
+    h.get_by_label_contains("already exists");
+    assert_eq!(std::fs::read_to_string(&existing).unwrap(), "# mine\n");
+    h.get_by_label("Keep it").click();
+    h.run_steps(2);
+    assert_eq!(
+        std::fs::read_to_string(&existing).unwrap(),
+        "# mine\n",
+        "kept"
+    );
+
+    // Enter in the name field chooses too; this time replace the file.
+    h.get_by_role(egui::accesskit::Role::TextInput).focus();
+    h.run_steps(1);
+    h.key_press(egui::Key::Enter);
+    h.run_steps(2);
+    h.get_by_label("Replace").click();
+    h.run_steps(2);
+    let text = std::fs::read_to_string(&existing).unwrap();
+    assert!(text.contains("[[node]]"), "{text}");
+    assert!(
+        !text.contains("database"),
+        "the bundled database is not written out: {text}"
+    );
+    organtex::app::Document::open(&existing).expect("the saved scene opens");
+}

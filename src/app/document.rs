@@ -127,7 +127,8 @@ impl Document {
     pub fn save(&self, path: &Path) -> Result<()> {
         let out = SavedScene {
             name: &self.spec.name,
-            database: absolute(&self.spec.database),
+            database: (self.spec.database != crate::scene::file::default_database())
+                .then(|| absolute(&self.spec.database)),
             camera: &self.spec.cameras,
             node: self
                 .spec
@@ -151,7 +152,9 @@ impl Document {
                 .collect(),
             bake: &self.spec.bake,
         };
-        let text = toml::to_string_pretty(&out)
+        // Plain (not pretty) TOML keeps arrays such as positions on one
+        // line, as a scene written by hand has them.
+        let text = toml::to_string(&out)
             .map_err(|e| Error::invalid(format!("cannot write the scene as TOML: {e}")))?;
         crate::atomic::write_file(path, |w| w.write_all(text.as_bytes()))
     }
@@ -179,7 +182,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
             ),
         ));
     }
-    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    let database = crate::scene::file::default_database();
     let db = crate::db::Database::open(&database)?;
     let texture = db
         .tissues
@@ -225,7 +228,10 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
 #[derive(Serialize)]
 struct SavedScene<'a> {
     name: &'a str,
-    database: PathBuf,
+    /// Left out when it is the bundled database, so the file still
+    /// works once the project is moved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    database: Option<PathBuf>,
     camera: &'a [Camera],
     node: Vec<SavedNode<'a>>,
     bake: &'a BakeSettings,
@@ -262,6 +268,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("saved.toml");
         doc.save(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        // Written as a person would: arrays on one line, no path to the
+        // bundled database.
+        assert!(text.contains("position = [0.0, 0.0, 4.0]"), "{text}");
+        assert!(!text.contains("database"), "{text}");
         let again = Document::open(&path).unwrap();
         assert_eq!(again.spec.nodes.len(), doc.spec.nodes.len());
         for (a, b) in again.spec.nodes.iter().zip(&doc.spec.nodes) {

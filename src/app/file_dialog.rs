@@ -20,6 +20,9 @@ pub struct FileDialog {
     /// The file name or path typed or clicked.
     pub name: String,
     entries: Vec<(String, bool)>,
+    /// Save: the existing file the user chose, until they confirm
+    /// replacing it.
+    replacing: Option<PathBuf>,
 }
 
 /// What the user did this frame.
@@ -61,6 +64,19 @@ impl FileDialog {
             entries: listing(&dir, purpose),
             dir,
             name,
+            replacing: None,
+        }
+    }
+
+    /// What choosing the typed or clicked name means: open it, or save to
+    /// it once the user agreed to replace an existing file.
+    fn choose(&mut self) -> Outcome {
+        let path = self.dir.join(self.name.trim());
+        if self.purpose == Purpose::Save && path.exists() {
+            self.replacing = Some(path);
+            Outcome::Pending
+        } else {
+            Outcome::Chosen(path)
         }
     }
 
@@ -71,6 +87,7 @@ impl FileDialog {
             Purpose::Save => "Save the scene",
         };
         let mut go_to: Option<PathBuf> = None;
+        let (mut chosen, mut keep) = (false, false);
         egui::Window::new(title)
             .collapsible(false)
             .default_width(420.0)
@@ -97,27 +114,49 @@ impl FileDialog {
                                 }
                             }
                             if r.double_clicked() && !is_dir {
-                                outcome = Outcome::Chosen(self.dir.join(name));
+                                self.name = name.clone();
+                                chosen = true;
                             }
                         }
                     });
+                if let Some(path) = &self.replacing {
+                    let name = path.file_name().unwrap_or_default().to_string_lossy();
+                    ui.label(format!("{name} already exists. Replace it?"));
+                    ui.horizontal(|ui| {
+                        if ui.button("Replace").clicked() {
+                            outcome = Outcome::Chosen(path.clone());
+                        }
+                        if ui.button("Keep it").clicked() {
+                            keep = true;
+                        }
+                    });
+                    return;
+                }
                 ui.horizontal(|ui| {
-                    ui.label("File:");
-                    ui.text_edit_singleline(&mut self.name);
+                    let label = ui.label("File:");
+                    let field = ui
+                        .text_edit_singleline(&mut self.name)
+                        .labelled_by(label.id);
+                    // Enter in the field chooses, as in any file dialog.
+                    chosen |= field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
                 });
                 ui.horizontal(|ui| {
                     let verb = match self.purpose {
                         Purpose::Open => "Open",
                         Purpose::Save => "Save",
                     };
-                    if ui.button(verb).clicked() && !self.name.trim().is_empty() {
-                        outcome = Outcome::Chosen(self.dir.join(self.name.trim()));
-                    }
+                    chosen |= ui.button(verb).clicked();
                     if ui.button("Cancel").clicked() {
                         outcome = Outcome::Cancelled;
                     }
                 });
             });
+        if keep {
+            self.replacing = None;
+        }
+        if chosen && !self.name.trim().is_empty() {
+            outcome = self.choose();
+        }
         if let Some(dir) = go_to {
             self.entries = listing(&dir, self.purpose);
             self.dir = dir;

@@ -96,7 +96,13 @@ pub struct Viewer {
     gpu: Gpu,
     egui_renderer: Arc<eframe::epaint::mutex::RwLock<egui_wgpu::Renderer>>,
     renderer: Renderer,
-    target: Option<(Offscreen, egui::TextureId)>,
+    /// Where the scene is drawn for egui: at the window's resolution,
+    /// and at half of it while the mouse moves the view or a texture.
+    targets: [Option<SceneTarget>; 2],
+    /// Which of `targets` was drawn last.
+    shown: usize,
+    /// Whether the last frame moved the view or a texture.
+    interacting: bool,
     pub doc: Option<Document>,
     pub list: DrawList,
     scene: Option<GpuScene>,
@@ -114,7 +120,9 @@ pub struct Viewer {
     tissues: Vec<TissueEntry>,
     dialog: Option<FileDialog>,
     jobs: Jobs,
-    dirty: bool,
+    /// Bumped by every change that alters the picture; a target whose
+    /// picture is of an older generation is drawn again.
+    generation: u64,
     opts: Options,
     frames_left: Option<usize>,
     screenshot_result: ScreenshotSlot,
@@ -122,6 +130,20 @@ pub struct Viewer {
     last_frame: Option<Instant>,
     ctx: egui::Context,
 }
+
+/// An offscreen picture of the scene, registered with egui.
+struct SceneTarget {
+    offscreen: Offscreen,
+    id: egui::TextureId,
+    /// The generation its picture shows.
+    drawn: Option<u64>,
+}
+
+/// Pixels of the interactive target per pixel of the full one, along
+/// each axis. On a software rasteriser (llvmpipe) a drag frame costs
+/// about 130 ms at full resolution and 90 ms at half; the full picture
+/// follows one frame after the mouse stops.
+const INTERACTIVE_SCALE: u32 = 2;
 
 /// Error out of the screenshot, reported by `run` after the window closes.
 pub type ScreenshotSlot = Arc<Mutex<Option<Result<()>>>>;
@@ -145,7 +167,9 @@ impl Viewer {
             gpu,
             egui_renderer: rs.renderer.clone(),
             renderer,
-            target: None,
+            targets: [None, None],
+            shown: 0,
+            interacting: false,
             doc: None,
             list: DrawList::default(),
             scene: None,
@@ -164,7 +188,7 @@ impl Viewer {
             tissues: Vec::new(),
             dialog: None,
             jobs: Jobs::default(),
-            dirty: true,
+            generation: 0,
             frames_left: opts.screenshot.as_ref().map(|_| opts.frames.max(1)),
             opts: opts.clone(),
             screenshot_result: Arc::new(Mutex::new(None)),
@@ -256,7 +280,7 @@ impl Viewer {
         };
         let mut s = doc.settings(f).clone();
         edit(&mut s);
-        s.tile_size = s.tile_size.max(1e-9);
+        tidy(&mut s);
         doc.set_settings(f, s.clone());
         if let Some(scene) = &self.scene {
             for m in 0..self.list.materials.len() {
@@ -267,7 +291,7 @@ impl Viewer {
                 }
             }
         }
-        self.dirty = true;
+        self.touch();
     }
 
     /// Select facet `f`.
@@ -306,14 +330,14 @@ impl Viewer {
             }
             Err(e) => self.error(e),
         }
-        self.dirty = true;
+        self.touch();
     }
 
     /// Back to the camera the document opened with.
     pub fn reset_view(&mut self) {
         if let Some(doc) = &self.doc {
             self.camera = OrbitCamera::for_scene(&doc.spec.cameras, doc.bounds());
-            self.dirty = true;
+            self.touch();
         }
     }
 
@@ -463,7 +487,7 @@ impl Viewer {
             );
         }
         self.cut_made = None;
-        self.dirty = true;
+        self.touch();
     }
 
     /// Whether the interior block is on the GPU.
@@ -475,7 +499,7 @@ impl Viewer {
     pub fn set_cut(&mut self, on: bool) {
         self.cut.on = on;
         self.cut_made = None;
-        self.dirty = true;
+        self.touch();
         if !on || self.has_block() || self.jobs.block.is_some() {
             return;
         }
@@ -563,36 +587,54 @@ impl Viewer {
         if let Some(p) = problem {
             self.error(format!("cannot cut: {p}"));
         }
-        self.dirty = true;
+        self.touch();
     }
 
-    /// Draw the scene into a texture `size` pixels, for egui to show.
-    fn draw_scene(&mut self, size: [u32; 2]) -> Option<egui::TextureId> {
-        let resized = self.target.as_ref().is_none_or(|(t, _)| t.size != size);
-        if resized {
-            let target = Offscreen::new(&self.gpu.device, size);
+    /// The picture changed: every target must be drawn again.
+    fn touch(&mut self) {
+        self.generation += 1;
+    }
+
+    /// Draw the scene for egui into a texture `size` pixels, or, while
+    /// the user moves the view (`coarse`), a texture
+    /// `INTERACTIVE_SCALE` times smaller that egui scales up.
+    fn draw_scene(&mut self, size: [u32; 2], coarse: bool) -> Option<egui::TextureId> {
+        let slot = coarse as usize;
+        let size = if coarse {
+            size.map(|s| s.div_ceil(INTERACTIVE_SCALE))
+        } else {
+            size
+        };
+        if self.targets[slot]
+            .as_ref()
+            .is_none_or(|t| t.offscreen.size != size)
+        {
+            let offscreen = Offscreen::new(&self.gpu.device, size);
             let mut r = self.egui_renderer.write();
-            let id = match self.target.take() {
-                Some((_, id)) => {
+            let id = match self.targets[slot].take() {
+                Some(old) => {
                     r.update_egui_texture_from_wgpu_texture(
                         &self.gpu.device,
-                        &target.display_view,
+                        &offscreen.display_view,
                         wgpu::FilterMode::Linear,
-                        id,
+                        old.id,
                     );
-                    id
+                    old.id
                 }
                 None => r.register_native_texture(
                     &self.gpu.device,
-                    &target.display_view,
+                    &offscreen.display_view,
                     wgpu::FilterMode::Linear,
                 ),
             };
-            self.target = Some((target, id));
-            self.dirty = true;
+            self.targets[slot] = Some(SceneTarget {
+                offscreen,
+                id,
+                drawn: None,
+            });
         }
-        let (target, id) = self.target.as_ref()?;
-        if self.dirty
+        let target = self.targets[slot].as_ref()?;
+        if target.drawn != Some(self.generation)
             && let Some(scene) = &self.scene
         {
             let view = View {
@@ -600,16 +642,20 @@ impl Viewer {
                 layers: self.layers,
                 clip: self.cut_plane().filter(|_| self.has_block()),
             };
-            target.draw(
+            target.offscreen.draw(
                 &self.renderer,
                 &self.gpu.device,
                 &self.gpu.queue,
                 scene,
                 &view,
             );
-            self.dirty = false;
+            let generation = self.generation;
+            if let Some(t) = self.targets[slot].as_mut() {
+                t.drawn = Some(generation);
+            }
         }
-        Some(*id)
+        self.shown = slot;
+        self.targets[slot].as_ref().map(|t| t.id)
     }
 
     /// Triangles of the cut surface drawn.
@@ -619,11 +665,10 @@ impl Viewer {
 
     /// The last frame drawn, read back (tests).
     pub fn read_scene(&self) -> Result<image::RgbaImage> {
-        let (target, _) = self
-            .target
+        let target = self.targets[self.shown]
             .as_ref()
             .ok_or_else(|| Error::invalid("nothing drawn yet"))?;
-        target.read(&self.gpu.device, &self.gpu.queue)
+        target.offscreen.read(&self.gpu.device, &self.gpu.queue)
     }
 
     fn save(&mut self, path: PathBuf) {
@@ -828,7 +873,7 @@ impl Viewer {
         ui.checkbox(&mut self.layers.seams, "seams");
         ui.checkbox(&mut self.layers.heat, "distortion");
         if self.layers != before {
-            self.dirty = true;
+            self.touch();
         }
         ui.separator();
         let mut on = self.cut.on;
@@ -844,7 +889,7 @@ impl Viewer {
             });
             ui.add(egui::Slider::new(&mut self.cut.at, 0.0..=1.0).text("position"));
             if self.cut != before {
-                self.dirty = true;
+                self.touch();
             }
         }
     }
@@ -875,9 +920,10 @@ impl Viewer {
             (avail.x * ppp).max(1.0) as u32,
             (avail.y * ppp).max(1.0) as u32,
         ];
-        let Some(id) = self.draw_scene(size) else {
+        let Some(id) = self.draw_scene(size, self.interacting) else {
             return;
         };
+        let was_interacting = std::mem::take(&mut self.interacting);
         let response = ui.add(egui::Image::new((id, avail)).sense(egui::Sense::click_and_drag()));
         let (shift, ctrl) = ui.input(|i| (i.modifiers.shift, i.modifiers.command));
         let delta = response.drag_delta();
@@ -911,7 +957,8 @@ impl Viewer {
             } else {
                 self.camera.pan(d.0, d.1, height);
             }
-            self.dirty = true;
+            self.touch();
+            self.interacting = true;
         }
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y) as f64;
@@ -919,12 +966,19 @@ impl Viewer {
                 // About 15% per wheel notch (80 points on X11).
                 let factor = (-scroll * WHEEL_RATE).exp();
                 if self.mode == Mode::Texture {
-                    self.edit_texture(|s| s.tile_size *= factor);
+                    // As the camera's zoom: the wheel forward makes the
+                    // texture look bigger.
+                    self.edit_texture(|s| s.tile_size /= factor);
                 } else {
                     self.camera.zoom(factor);
                 }
-                self.dirty = true;
+                self.touch();
+                self.interacting = true;
             }
+        }
+        if was_interacting && !self.interacting {
+            // The mouse stopped: draw the full picture next frame.
+            ui.ctx().request_repaint();
         }
     }
 
@@ -954,11 +1008,12 @@ impl Viewer {
             self.frame_times.clear();
             return;
         }
-        if self.opts.drag {
+        if self.opts.drag && left > 1 {
             self.edit_texture(|s| s.offset[0] += 0.002);
+            self.interacting = true;
         }
         // Every frame drawn anew, so frame times are those of real frames.
-        self.dirty = true;
+        self.touch();
         if left > 1 {
             self.frames_left = Some(left - 1);
         } else if left == 1 {
@@ -1011,6 +1066,40 @@ impl eframe::App for Viewer {
     }
 }
 
+/// Keep a texture transform the mouse made readable in a saved scene and
+/// within one period, as the sliders show it: offsets wrap into [-1, 1)
+/// texture widths (the tissue repeats every width and the mirrored
+/// overlay every two, so nothing moves), rotation into (-180, 180]
+/// degrees; values are rounded far below what shows (1e-4 of a width,
+/// 1e-3 degree, 5 significant digits of tile size).
+fn tidy(s: &mut crate::scene::file::FacetSettings) {
+    for o in &mut s.offset {
+        let wrapped = round_to((*o + 1.0).rem_euclid(2.0) - 1.0, 4);
+        *o = if wrapped >= 1.0 {
+            wrapped - 2.0
+        } else {
+            wrapped
+        };
+    }
+    s.rotation = round_to(180.0 - (180.0 - s.rotation).rem_euclid(360.0), 3);
+    let tile = s.tile_size.max(1e-9);
+    let decimals = 4 - tile.log10().floor() as i32;
+    s.tile_size = round_to(tile, decimals).max(10f64.powi(-decimals));
+}
+
+/// `x` rounded to `decimals` decimal places (negative: to tens, hundreds
+/// ...); dividing by the exact power of ten gives the double nearest the
+/// decimal, so it prints short.
+fn round_to(x: f64, decimals: i32) -> f64 {
+    if decimals >= 0 {
+        let p = 10f64.powi(decimals);
+        (x * p).round() / p
+    } else {
+        let p = 10f64.powi(-decimals);
+        (x / p).round() * p
+    }
+}
+
 /// Wheel zoom and texture scale per point of scroll.
 const WHEEL_RATE: f64 = 0.002;
 
@@ -1055,4 +1144,41 @@ fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
             (t.id.clone(), t.name.clone(), img)
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::file::FacetSettings;
+
+    fn settings(tile_size: f64, rotation: f64, offset: [f64; 2]) -> FacetSettings {
+        FacetSettings {
+            name: "f".into(),
+            texture: "t".into(),
+            tile_size,
+            rotation,
+            offset,
+            bump: 0.0,
+            overlay: None,
+            overlay_opacity: 0.0,
+            overlay_tile_size: 1.0,
+            overlap: 0.0,
+            origin: Default::default(),
+        }
+    }
+
+    #[test]
+    fn a_dragged_transform_is_kept_within_one_period_and_short() {
+        let mut s = settings(4.950267134449128, 190.0004, [3.18321148083675, -1.2]);
+        tidy(&mut s);
+        assert_eq!(s.tile_size, 4.9503);
+        assert_eq!(s.rotation, -170.0);
+        // 3.1832 and -1.2 texture widths, two-width period: 1.1832 is -0.8168.
+        assert_eq!(s.offset, [-0.8168, 0.8]);
+        assert_eq!(format!("{:?}", s.offset), "[-0.8168, 0.8]");
+        let mut s = settings(0.000123456, -180.0, [0.99999, 1.0]);
+        tidy(&mut s);
+        assert_eq!((s.tile_size, s.rotation), (0.00012346, 180.0));
+        assert_eq!(s.offset, [-1.0, -1.0]);
+    }
 }

@@ -29,7 +29,7 @@ enum DbCommand {
 }
 
 pub fn default_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database")
+    organtex::scene::file::default_database()
 }
 
 pub fn run(args: Args) -> Result<()> {

@@ -210,6 +210,12 @@ pub struct SceneSpec {
     pub bake: BakeSettings,
 }
 
+/// The tissue database bundled with organtex, used when a scene names
+/// none.
+pub fn default_database() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database")
+}
+
 /// Line of a byte offset.
 fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
@@ -252,7 +258,7 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
         }),
         database: match &file.database {
             Some(d) => dir.join(d),
-            None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database"),
+            None => default_database(),
         },
         cameras: file.cameras.clone(),
         nodes: Vec::new(),

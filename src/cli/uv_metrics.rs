@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use organtex::mesh::repair::make_manifold;
 use organtex::mesh::{Topology, io};
 use organtex::unwrap::metrics::measure;
 use organtex::unwrap::visibility::{Viewpoints, compute};
@@ -17,10 +18,17 @@ pub struct Args {
     /// Orthographic views for the seams' visibility.
     #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(1..=1024))]
     views: u32,
+    /// Split non-manifold edges and vertices first instead of refusing the
+    /// mesh (scans often have some), as `unwrap --repair` does.
+    #[arg(long)]
+    repair: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let mesh = io::read(&args.file)?;
+    let mut mesh = io::read(&args.file)?;
+    if args.repair {
+        mesh = make_manifold(&mesh).0;
+    }
     let topo = Topology::build(&mesh).map_err(|e| e.in_file(&args.file))?;
     let bars = Bars::new();
     let vis = compute(

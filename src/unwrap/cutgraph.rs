@@ -74,6 +74,43 @@ pub fn handle_loops(
     loops
 }
 
+/// Seams that leave the surface in one piece: where seams, handle loops
+/// and boundary loops together enclose a patch (a seam path touching a
+/// boundary or handle loop twice does), the costliest seam edge between
+/// the patch and the rest is closed again, until the faces are connected
+/// across the remaining open edges. Gluing two disks along an edge leaves
+/// a disk, so a cut into disks stays one.
+pub fn connect_pieces(topo: &Topology, seams: Vec<EdgeId>, cost: &[f64]) -> Vec<EdgeId> {
+    let mut is_seam = vec![false; topo.num_edges()];
+    for e in &seams {
+        is_seam[e.idx()] = true;
+    }
+    let faces = |e: EdgeId| {
+        let h = topo.edge_halfedge(e);
+        topo.twin(h)
+            .map(|t| (topo.face(h).idx(), topo.face(t).idx()))
+    };
+    let mut sets = DisjointSets::new(topo.num_faces());
+    for e in (0..topo.num_edges()).map(EdgeId::from) {
+        if !is_seam[e.idx()]
+            && let Some((a, b)) = faces(e)
+        {
+            sets.union(a, b);
+        }
+    }
+    let mut by_cost = seams.clone();
+    by_cost.sort_by(|x, y| cost[y.idx()].total_cmp(&cost[x.idx()]).then(x.cmp(y)));
+    for e in by_cost {
+        if let Some((a, b)) = faces(e)
+            && sets.find(a) != sets.find(b)
+        {
+            sets.union(a, b);
+            is_seam[e.idx()] = false;
+        }
+    }
+    seams.into_iter().filter(|e| is_seam[e.idx()]).collect()
+}
+
 /// A mesh cut open: the cut triangles index cut vertices, and `origin`
 /// maps each cut vertex to the vertex of the uncut mesh it copies.
 #[derive(Clone, Debug)]
@@ -115,4 +152,50 @@ pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::shapes::icosphere;
+
+    #[test]
+    fn a_patch_enclosed_by_seams_is_opened_back_onto_the_rest() {
+        // Seams around the fan of vertex 0 (its link) cut the sphere into
+        // two disks; connecting reopens exactly one edge, the costliest.
+        let sphere = icosphere(2);
+        let topo = Topology::build(&sphere).unwrap();
+        let graph = EdgeGraph::new(&topo);
+        let ring: Vec<VertexId> = graph
+            .neighbours(VertexId(0))
+            .iter()
+            .map(|&(u, _)| u)
+            .collect();
+        let link: Vec<EdgeId> = ring
+            .iter()
+            .flat_map(|&a| ring.iter().filter_map(move |&b| (a < b).then_some((a, b))))
+            .filter_map(|(a, b)| topo.edge_between(a, b))
+            .collect();
+        assert_eq!(link.len(), ring.len(), "the link is a cycle");
+        let cut_before = cut(&sphere, &link);
+        let pieces = |c: &Cut| {
+            let m = TriMesh::new(
+                c.origin
+                    .iter()
+                    .map(|&v| sphere.positions[v as usize])
+                    .collect(),
+                c.triangles.clone(),
+            );
+            Components::find(&Topology::build(&m).unwrap()).count
+        };
+        assert_eq!(pieces(&cut_before), 2);
+        let mut cost = vec![1.0; topo.num_edges()];
+        cost[link[2].idx()] = 5.0;
+        let seams = connect_pieces(&topo, link.clone(), &cost);
+        assert_eq!(seams.len(), link.len() - 1);
+        assert!(!seams.contains(&link[2]), "the costliest edge reopened");
+        let after = cut(&sphere, &seams);
+        assert_eq!(pieces(&after), 1);
+        assert_disks(&after, &sphere.positions).unwrap();
+    }
 }

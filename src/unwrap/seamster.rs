@@ -23,8 +23,8 @@
 use std::f64::consts::PI;
 
 use super::conformal;
-use super::cutgraph::{Cut, assert_disks, cut, handle_loops};
-use super::steiner;
+use super::cutgraph::{Cut, assert_disks, connect_pieces, cut, handle_loops};
+use super::steiner::{self, prune_leaves};
 use super::terminals::{disc_curvature, select};
 use crate::error::Result;
 use crate::mesh::curvature::Curvature;
@@ -151,7 +151,20 @@ pub fn choose(
         &[],
         interior,
     );
-    let sharpness: Vec<f64> = defect.iter().map(|d| d.abs()).collect();
+    // A corner keeps its defect when its ring's are added (they are
+    // flat); a spike of scan noise does not (its ring bends the other
+    // way), so a sharp terminal needs both large.
+    let sharpness: Vec<f64> = (0..mesh.num_vertices())
+        .map(|v| {
+            let ring: f64 = s
+                .graph
+                .neighbours(VertexId::from(v))
+                .iter()
+                .map(|(u, _)| defect[u.idx()])
+                .sum();
+            defect[v].abs().min((defect[v] + ring).abs())
+        })
+        .collect();
     let sharp = select(
         &s.graph,
         &mesh.positions,
@@ -263,13 +276,23 @@ fn steiner_seams(s: &Surface, terminals: &[VertexId], loops: &[EdgeId]) -> Vec<E
     }
     let mut edges = steiner::tree(&s.graph, &s.cost, &groups);
     edges.extend_from_slice(loops);
-    interior_only(s, edges)
+    finish(s, edges, terminals)
 }
 
-fn interior_only(s: &Surface, mut edges: Vec<EdgeId>) -> Vec<EdgeId> {
+/// The interior edges of `edges`, with any patch they enclose together
+/// with boundary and handle loops opened back onto the rest
+/// (`connect_pieces`), and the branches that then lead nowhere (to no
+/// terminal or boundary) dropped.
+fn finish(s: &Surface, mut edges: Vec<EdgeId>, terminals: &[VertexId]) -> Vec<EdgeId> {
     edges.retain(|&e| !s.topo.is_boundary_edge(e));
     edges.sort_unstable();
     edges.dedup();
+    let mut edges = connect_pieces(s.topo, edges, &s.cost);
+    let mut kept = vec![false; s.mesh.num_vertices()];
+    for v in terminals.iter().copied().chain(s.boundary_vertices()) {
+        kept[v.idx()] = true;
+    }
+    prune_leaves(&s.graph, &mut edges, |v| kept[v.idx()]);
     edges
 }
 
@@ -335,7 +358,8 @@ fn grow(
             ShortestPaths::from_sources(&s.graph, &discounted, &on_cut(s, &edges, terminals));
         edges.extend(paths.path_to_source(&s.graph, t));
     }
-    interior_only(s, edges)
+    let all: Vec<VertexId> = terminals.iter().chain(added).copied().collect();
+    finish(s, edges, &all)
 }
 
 /// The log scale factor of the cut surface's least-distortion conformal

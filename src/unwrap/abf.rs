@@ -34,6 +34,11 @@ pub struct AbfOptions {
     /// Converged when every constraint and every component of the
     /// Lagrangian's gradient is below this.
     pub tolerance: f64,
+    /// Weight of area against angle in the balancing rounds that follow
+    /// the layout (`balance`: the hybrid model's lambda; 0: ABF++ alone).
+    pub area_weight: f64,
+    /// At most this many balancing rounds.
+    pub balance_rounds: usize,
 }
 
 impl Default for AbfOptions {
@@ -46,6 +51,8 @@ impl Default for AbfOptions {
         AbfOptions {
             max_iterations: 100,
             tolerance: 1e-7,
+            area_weight: 0.03,
+            balance_rounds: 10,
         }
     }
 }

@@ -5,6 +5,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 use super::abf::{self, AbfOptions};
+use super::balance::balance;
 use super::layout;
 use crate::error::Result;
 use crate::mesh::curvature::corner_angles;
@@ -16,11 +17,11 @@ pub enum Method {
     AbfPlusPlus {
         iterations: usize,
         residual: f64,
+        /// Area balancing rounds kept after the layout (`balance`).
+        balance_rounds: usize,
     },
     /// LSCM, because ABF++ could not be used: `reason` says why.
-    Lscm {
-        reason: String,
-    },
+    Lscm { reason: String },
 }
 
 #[derive(Clone, Debug)]
@@ -44,16 +45,22 @@ pub fn flipped(chart: &TriMesh, uv: &[DVec2]) -> usize {
 }
 
 pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Flattened> {
-    let reason = match abf::solve(chart, topo, opts) {
-        Ok(solution) => {
-            let uv = layout::from_angles(chart, topo, &solution.angles)?;
+    let solved = abf::solve(chart, topo, opts).and_then(|solution| {
+        let uv = layout::from_angles(chart, topo, &solution.angles)?;
+        Ok((solution, uv))
+    });
+    let reason = match solved {
+        Ok((solution, uv)) => {
             let flips = flipped(chart, &uv);
             if flips == 0 {
+                let (uv, balance_rounds) =
+                    balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0));
                 return Ok(Flattened {
                     uv,
                     method: Method::AbfPlusPlus {
                         iterations: solution.iterations,
                         residual: solution.residual,
+                        balance_rounds,
                     },
                 });
             }

@@ -8,6 +8,7 @@
 //! texture with a world-space tile size) and placed side by side.
 
 pub mod abf;
+pub mod balance;
 pub mod conformal;
 pub mod cutgraph;
 pub mod debug;

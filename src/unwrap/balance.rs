@@ -1,0 +1,291 @@
+//! Area balancing after ABF++: a few rounds of Liu, Zhang, Xu, Gotsman and
+//! Gortler's local/global parameterisation (2008), hybrid model, started
+//! from the ABF++ layout.
+//!
+//! ABF++ is as conformal as a flattening can be, so all of its distortion
+//! is area distortion, piled up where the surface curves most. Moving away
+//! from the conformal optimum costs conformality only to second order and
+//! gains area to first order: with a small weight on area, the texture's
+//! scale evens out for a barely measurable loss of angle (bunny: mean
+//! |log area ratio| 0.218 -> 0.18, mean sigma1/sigma2 1.014 -> 1.018).
+//!
+//! Energy, per triangle t of area A_t with Jacobian J_t (surface to uv):
+//! A_t (|J_t - L_t|^2 + lambda (a^2 + b^2 - 1)^2), L_t = [[a, b], [-b, a]]
+//! a scaled rotation. lambda = 0 keeps the conformal map (ASAP), large
+//! lambda tends to as-rigid-as-possible. Local step: per triangle, L_t's
+//! direction is that of J_t's similarity part C, its scale s the positive
+//! root of lambda s^3 + (1 - lambda) s = |C|. Global step: the uvs that
+//! best fit the L_t, one cotangent-Laplacian solve per coordinate (the
+//! matrix is factored once). A round that would flip a triangle ends the
+//! balancing and its layout is not kept.
+
+use std::cmp::Ordering;
+
+use glam::{DMat2, DVec2, DVec3};
+
+use crate::linalg::SpdPattern;
+use crate::mesh::TriMesh;
+
+/// A chart's layout with area evened out, and how many rounds it took;
+/// `None` when the first round would flip a triangle or the chart's
+/// Laplacian cannot be factored (a chart of slivers).
+pub fn balance(
+    chart: &TriMesh,
+    uv: &[DVec2],
+    lambda: f64,
+    max_rounds: usize,
+) -> Option<(Vec<DVec2>, usize)> {
+    let n = chart.num_vertices();
+    let faces = &chart.triangles;
+    if faces.is_empty() || lambda <= 0.0 || max_rounds == 0 {
+        return None;
+    }
+    // Each triangle in its own plane: corner 0 at the origin, corner 1 on
+    // the x axis.
+    let local: Vec<[DVec2; 3]> = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
+    // Half the cotangent of each corner: the weight of the opposite edge.
+    let weight: Vec<[f64; 3]> = local
+        .iter()
+        .map(|p| {
+            std::array::from_fn(|c| {
+                let (a, b) = (p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]);
+                0.5 * a.dot(b) / a.perp_dot(b).abs().max(1e-300)
+            })
+        })
+        .collect();
+
+    // The scale at which uv area equals surface area, so that L_t's
+    // "unit scale" is the surface's own.
+    let (area_3d, area_uv) = faces.iter().zip(&local).fold((0.0, 0.0), |(s, u), (t, p)| {
+        let q = t.map(|v| uv[v as usize]);
+        (
+            s + (p[1] - p[0]).perp_dot(p[2] - p[0]) / 2.0,
+            u + (q[1] - q[0]).perp_dot(q[2] - q[0]) / 2.0,
+        )
+    });
+    if !(area_uv > 0.0 && area_3d > 0.0) {
+        return None;
+    }
+    let scale = (area_3d / area_uv).sqrt();
+    let mut current: Vec<DVec2> = uv.iter().map(|&u| u * scale).collect();
+
+    // The Laplacian over every vertex but one pinned (translation).
+    let pin = faces[0][0] as usize;
+    let mut index = vec![u32::MAX; n];
+    let mut count = 0u32;
+    for t in faces {
+        for &v in t {
+            if v as usize != pin && index[v as usize] == u32::MAX {
+                index[v as usize] = count;
+                count += 1;
+            }
+        }
+    }
+    let mut positions = Vec::with_capacity(faces.len() * 9);
+    let mut values = Vec::with_capacity(faces.len() * 9);
+    for (t, w) in faces.iter().zip(&weight) {
+        for c in 0..3 {
+            let (i, j) = (
+                index[t[(c + 1) % 3] as usize],
+                index[t[(c + 2) % 3] as usize],
+            );
+            for (r, s, x) in [(i, i, w[c]), (j, j, w[c]), (i.max(j), i.min(j), -w[c])] {
+                if r != u32::MAX && s != u32::MAX {
+                    positions.push((r, s));
+                    values.push(x);
+                }
+            }
+        }
+    }
+    let laplacian = SpdPattern::new(count as usize, &positions)
+        .and_then(|p| p.factor(&values))
+        .ok()?;
+
+    let mut rounds = 0;
+    while rounds < max_rounds {
+        // Local: the scaled rotation each triangle should be.
+        let targets: Vec<DMat2> = faces
+            .iter()
+            .zip(&local)
+            .map(|(t, p)| target(jacobian(p, t.map(|v| current[v as usize])), lambda))
+            .collect();
+        // Global: sum over edges (i, j) of w_ij (u_i - u_j - L_t (x_i - x_j))
+        // = 0 at every free vertex.
+        let mut rhs = [vec![0.0; count as usize], vec![0.0; count as usize]];
+        for ((t, p), (w, l)) in faces.iter().zip(&local).zip(weight.iter().zip(&targets)) {
+            for (c, &wc) in w.iter().enumerate() {
+                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                let d = *l * (p[a] - p[b]) * wc;
+                for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
+                    let k = index[v as usize];
+                    if k != u32::MAX {
+                        rhs[0][k as usize] += sign * d.x;
+                        rhs[1][k as usize] += sign * d.y;
+                    }
+                }
+            }
+        }
+        // The pinned vertex's known uv moves to the right-hand side.
+        let fixed = current[pin];
+        for (t, w) in faces.iter().zip(&weight) {
+            for c in 0..3 {
+                let (i, j) = (t[(c + 1) % 3] as usize, t[(c + 2) % 3] as usize);
+                for (free, other) in [(i, j), (j, i)] {
+                    if other == pin && index[free] != u32::MAX {
+                        rhs[0][index[free] as usize] += w[c] * fixed.x;
+                        rhs[1][index[free] as usize] += w[c] * fixed.y;
+                    }
+                }
+            }
+        }
+        for r in &mut rhs {
+            laplacian.solve(r);
+        }
+        let next: Vec<DVec2> = (0..n)
+            .map(|v| match index[v] {
+                u32::MAX => current[v],
+                k => DVec2::new(rhs[0][k as usize], rhs[1][k as usize]),
+            })
+            .collect();
+        if faces.iter().any(|t| {
+            let q = t.map(|v| next[v as usize]);
+            // Flipped, degenerate or not a number.
+            (q[1] - q[0]).perp_dot(q[2] - q[0]).partial_cmp(&0.0) != Some(Ordering::Greater)
+        }) {
+            break;
+        }
+        let moved = next
+            .iter()
+            .zip(&current)
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f64::max);
+        current = next;
+        rounds += 1;
+        if moved <= 1e-6 * area_3d.sqrt() {
+            break;
+        }
+    }
+    (rounds > 0).then(|| (current.into_iter().map(|u| u / scale).collect(), rounds))
+}
+
+/// A triangle laid out in its plane, corner 0 at the origin and corner 1
+/// on the positive x axis, counter-clockwise.
+fn planar([p0, p1, p2]: [DVec3; 3]) -> [DVec2; 3] {
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let l1 = e1.length().max(1e-300);
+    let x = e1 / l1;
+    let along = e2.dot(x);
+    let across = (e2 - x * along).length();
+    [DVec2::ZERO, DVec2::new(l1, 0.0), DVec2::new(along, across)]
+}
+
+/// The Jacobian of the affine map taking a planar triangle to its uvs.
+fn jacobian(p: &[DVec2; 3], q: [DVec2; 3]) -> DMat2 {
+    let from = DMat2::from_cols(p[1] - p[0], p[2] - p[0]);
+    let to = DMat2::from_cols(q[1] - q[0], q[2] - q[0]);
+    if from.determinant().abs() <= 1e-300 {
+        return DMat2::IDENTITY;
+    }
+    to * from.inverse()
+}
+
+/// The local step: the scaled rotation nearest `j` under the hybrid
+/// energy.
+fn target(j: DMat2, lambda: f64) -> DMat2 {
+    // Similarity part of J: [[c1, c2], [-c2, c1]] in row terms.
+    let c1 = (j.x_axis.x + j.y_axis.y) / 2.0;
+    let c2 = (j.y_axis.x - j.x_axis.y) / 2.0;
+    let c = c1.hypot(c2);
+    if c <= 1e-300 {
+        return DMat2::IDENTITY;
+    }
+    // lambda s^3 + (1 - lambda) s - c = 0 has one positive root; Newton
+    // from the larger of c and 1 comes down to it monotonically.
+    let mut s = c.max(1.0);
+    for _ in 0..50 {
+        let f = lambda * s * s * s + (1.0 - lambda) * s - c;
+        let df = 3.0 * lambda * s * s + (1.0 - lambda);
+        if df <= 0.0 {
+            break;
+        }
+        let step = f / df;
+        s -= step;
+        if step.abs() <= 1e-14 * s.abs().max(1e-300) {
+            break;
+        }
+    }
+    let k = s.max(0.0) / c;
+    // Columns of [[c1, c2], [-c2, c1]].
+    DMat2::from_cols(DVec2::new(c1, -c2) * k, DVec2::new(c2, c1) * k)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_local_step_keeps_rotation_and_pulls_scale_towards_one() {
+        let turn = DMat2::from_angle(0.4);
+        for (scale, lambda) in [(2.0, 0.0), (2.0, 0.5), (0.3, 0.5), (2.0, 0.999)] {
+            let l = target(turn * scale, lambda);
+            let s = l.x_axis.length();
+            // A rotation times s, s between the original scale and 1.
+            assert!((l - turn * s).abs_diff_eq(DMat2::ZERO, 1e-12), "{l:?}");
+            assert!(
+                (lambda * s * s * s + (1.0 - lambda) * s - scale).abs() < 1e-9,
+                "s {s}"
+            );
+            if lambda == 0.0 {
+                assert!((s - scale).abs() < 1e-12);
+            } else {
+                assert!((s - 1.0).abs() < (scale - 1.0f64).abs());
+            }
+        }
+    }
+
+    #[test]
+    fn a_flattened_cone_evens_out_its_area_without_flips() {
+        // A cone fan cut open along one edge and laid out conformally
+        // (the 3D angles scaled): area ratios differ between the rim and
+        // the tip; balancing brings them together.
+        let mut positions = vec![DVec3::new(0.0, 0.0, 1.5)];
+        let k = 12;
+        for i in 0..=k {
+            let a = std::f64::consts::TAU * 0.8 * i as f64 / k as f64;
+            positions.push(DVec3::new(a.cos(), a.sin(), 0.0));
+            positions.push(DVec3::new(2.0 * a.cos(), 2.0 * a.sin(), -1.5));
+        }
+        let mut triangles = Vec::new();
+        for i in 0..k as u32 {
+            let (a, b, c, d) = (1 + 2 * i, 3 + 2 * i, 2 + 2 * i, 4 + 2 * i);
+            triangles.push([0, a, b]);
+            triangles.push([a, c, d]);
+            triangles.push([a, d, b]);
+        }
+        let chart = TriMesh::new(positions, triangles);
+        let topo = crate::mesh::Topology::build(&chart).unwrap();
+        let angles = crate::mesh::curvature::corner_angles(&chart);
+        let uv = crate::unwrap::layout::from_angles(&chart, &topo, &angles).unwrap();
+        let spread = |uv: &[DVec2]| {
+            let logs: Vec<f64> = (0..chart.num_faces())
+                .map(|f| {
+                    let q = chart.triangles[f].map(|v| uv[v as usize]);
+                    ((q[1] - q[0]).perp_dot(q[2] - q[0]) / 2.0 / chart.face_area(f)).ln()
+                })
+                .collect();
+            let max = logs.iter().cloned().fold(f64::MIN, f64::max);
+            let min = logs.iter().cloned().fold(f64::MAX, f64::min);
+            max - min
+        };
+        let (balanced, rounds) = balance(&chart, &uv, 0.5, 20).expect("balanced");
+        assert!(rounds > 0);
+        assert_eq!(crate::unwrap::flatten::flipped(&chart, &balanced), 0);
+        assert!(
+            spread(&balanced) < 0.8 * spread(&uv),
+            "{} -> {}",
+            spread(&uv),
+            spread(&balanced)
+        );
+    }
+}

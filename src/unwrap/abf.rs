@@ -482,30 +482,7 @@ mod tests {
 
     #[test]
     fn a_cut_sphere_satisfies_every_constraint() {
-        let sphere = crate::mesh::shapes::icosphere(3);
-        // Cut along a chain of edges from one pole to the other.
-        let topo = Topology::build(&sphere).unwrap();
-        let graph = crate::mesh::graph::EdgeGraph::new(&topo);
-        let length: Vec<f64> = (0..graph.num_edges())
-            .map(|e| {
-                let [a, b] = graph.ends(crate::mesh::EdgeId::from(e));
-                (sphere.positions[a.idx()] - sphere.positions[b.idx()]).length()
-            })
-            .collect();
-        let paths =
-            crate::mesh::graph::ShortestPaths::from_sources(&graph, &length, &[(VertexId(0), 0)]);
-        let far = (0..sphere.num_vertices())
-            .max_by(|&a, &b| paths.distance[a].total_cmp(&paths.distance[b]))
-            .unwrap();
-        let seams = paths.path_to_source(&graph, VertexId::from(far));
-        let cut = crate::unwrap::cutgraph::cut(&sphere, &seams);
-        let chart = TriMesh::new(
-            cut.origin
-                .iter()
-                .map(|&v| sphere.positions[v as usize])
-                .collect(),
-            cut.triangles.clone(),
-        );
+        let chart = crate::unwrap::cutgraph::cut_open_sphere(3);
         let chart_topo = Topology::build(&chart).unwrap();
         let solution = solve(&chart, &chart_topo, &AbfOptions::default()).unwrap();
         // Triangle sums, vertex sums and wheel products hold.

@@ -16,18 +16,19 @@
 //! direction is that of J_t's similarity part C, its scale s the positive
 //! root of lambda s^3 + (1 - lambda) s = |C|. Global step: the uvs that
 //! best fit the L_t, one cotangent-Laplacian solve per coordinate (the
-//! matrix is factored once). A round that would flip a triangle ends the
-//! balancing and its layout is not kept.
+//! matrix is factored once). A round that would flip a triangle more than
+//! the layout had flipped ends the balancing and is not kept.
 
 use std::cmp::Ordering;
 
 use glam::{DMat2, DVec2, DVec3};
 
-use crate::linalg::SpdPattern;
+use super::conformal::Dirichlet;
 use crate::mesh::TriMesh;
+use crate::mesh::curvature::corner_angles;
 
 /// A chart's layout with area evened out, and how many rounds it took;
-/// `None` when the first round would flip a triangle or the chart's
+/// `None` when the first round would flip more triangles or the chart's
 /// Laplacian cannot be factored (a chart of slivers).
 pub fn balance(
     chart: &TriMesh,
@@ -43,17 +44,6 @@ pub fn balance(
     // Each triangle in its own plane: corner 0 at the origin, corner 1 on
     // the x axis.
     let local: Vec<[DVec2; 3]> = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
-    // Half the cotangent of each corner: the weight of the opposite edge.
-    let weight: Vec<[f64; 3]> = local
-        .iter()
-        .map(|p| {
-            std::array::from_fn(|c| {
-                let (a, b) = (p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]);
-                0.5 * a.dot(b) / a.perp_dot(b).abs().max(1e-300)
-            })
-        })
-        .collect();
-
     // The scale at which uv area equals surface area, so that L_t's
     // "unit scale" is the surface's own.
     let (area_3d, area_uv) = faces.iter().zip(&local).fold((0.0, 0.0), |(s, u), (t, p)| {
@@ -69,38 +59,29 @@ pub fn balance(
     let scale = (area_3d / area_uv).sqrt();
     let mut current: Vec<DVec2> = uv.iter().map(|&u| u * scale).collect();
 
-    // The Laplacian over every vertex but one pinned (translation).
+    // The Laplacian over every vertex but one pinned (translation); on a
+    // scan whose obtuse slivers make it indefinite, with Tutte's floor on
+    // the weights.
     let pin = faces[0][0] as usize;
-    let mut index = vec![u32::MAX; n];
-    let mut count = 0u32;
-    for t in faces {
-        for &v in t {
-            if v as usize != pin && index[v as usize] == u32::MAX {
-                index[v as usize] = count;
-                count += 1;
-            }
-        }
-    }
-    let mut positions = Vec::with_capacity(faces.len() * 9);
-    let mut values = Vec::with_capacity(faces.len() * 9);
-    for (t, w) in faces.iter().zip(&weight) {
-        for c in 0..3 {
-            let (i, j) = (
-                index[t[(c + 1) % 3] as usize],
-                index[t[(c + 2) % 3] as usize],
-            );
-            for (r, s, x) in [(i, i, w[c]), (j, j, w[c]), (i.max(j), i.min(j), -w[c])] {
-                if r != u32::MAX && s != u32::MAX {
-                    positions.push((r, s));
-                    values.push(x);
-                }
-            }
-        }
-    }
-    let laplacian = SpdPattern::new(count as usize, &positions)
-        .and_then(|p| p.factor(&values))
+    let fixed: Vec<bool> = (0..n).map(|v| v == pin).collect();
+    let angles = corner_angles(chart);
+    let laplacian = Dirichlet::new(chart, &angles, &fixed, false)
+        .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true))
         .ok()?;
 
+    // Triangles flipped, degenerate or not a number.
+    let bad = |uv: &[DVec2]| {
+        faces
+            .iter()
+            .filter(|t| {
+                let q = t.map(|v| uv[v as usize]);
+                (q[1] - q[0]).perp_dot(q[2] - q[0]).partial_cmp(&0.0) != Some(Ordering::Greater)
+            })
+            .count()
+    };
+    // A layout that came with a few flipped slivers may keep them (rounds
+    // often unfold them), never gain any.
+    let mut allowed = bad(&current);
     let mut rounds = 0;
     while rounds < max_rounds {
         // Local: the scaled rotation each triangle should be.
@@ -111,49 +92,33 @@ pub fn balance(
             .collect();
         // Global: sum over edges (i, j) of w_ij (u_i - u_j - L_t (x_i - x_j))
         // = 0 at every free vertex.
-        let mut rhs = [vec![0.0; count as usize], vec![0.0; count as usize]];
-        for ((t, p), (w, l)) in faces.iter().zip(&local).zip(weight.iter().zip(&targets)) {
-            for (c, &wc) in w.iter().enumerate() {
-                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-                let d = *l * (p[a] - p[b]) * wc;
-                for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
-                    let k = index[v as usize];
-                    if k != u32::MAX {
-                        rhs[0][k as usize] += sign * d.x;
-                        rhs[1][k as usize] += sign * d.y;
-                    }
-                }
-            }
-        }
-        // The pinned vertex's known uv moves to the right-hand side.
-        let fixed = current[pin];
-        for (t, w) in faces.iter().zip(&weight) {
+        let mut source = [vec![0.0; n], vec![0.0; n]];
+        for (f, (t, (p, l))) in faces.iter().zip(local.iter().zip(&targets)).enumerate() {
             for c in 0..3 {
-                let (i, j) = (t[(c + 1) % 3] as usize, t[(c + 2) % 3] as usize);
-                for (free, other) in [(i, j), (j, i)] {
-                    if other == pin && index[free] != u32::MAX {
-                        rhs[0][index[free] as usize] += w[c] * fixed.x;
-                        rhs[1][index[free] as usize] += w[c] * fixed.y;
-                    }
+                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                let d = *l * (p[a] - p[b]) * laplacian.weight(f, c);
+                for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
+                    source[0][v as usize] += sign * d.x;
+                    source[1][v as usize] += sign * d.y;
                 }
             }
         }
-        for r in &mut rhs {
-            laplacian.solve(r);
-        }
-        let next: Vec<DVec2> = (0..n)
-            .map(|v| match index[v] {
-                u32::MAX => current[v],
-                k => DVec2::new(rhs[0][k as usize], rhs[1][k as usize]),
-            })
+        let given: [Vec<f64>; 2] = [
+            current.iter().map(|u| u.x).collect(),
+            current.iter().map(|u| u.y).collect(),
+        ];
+        let x = laplacian.solve(&given[0], &source[0]);
+        let y = laplacian.solve(&given[1], &source[1]);
+        let next: Vec<DVec2> = x
+            .into_iter()
+            .zip(y)
+            .map(|(x, y)| DVec2::new(x, y))
             .collect();
-        if faces.iter().any(|t| {
-            let q = t.map(|v| next[v as usize]);
-            // Flipped, degenerate or not a number.
-            (q[1] - q[0]).perp_dot(q[2] - q[0]).partial_cmp(&0.0) != Some(Ordering::Greater)
-        }) {
+        let folded = bad(&next);
+        if folded > allowed {
             break;
         }
+        allowed = folded;
         let moved = next
             .iter()
             .zip(&current)

@@ -154,6 +154,29 @@ pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
     Ok(())
 }
 
+/// An icosphere cut open along a chain of edges from one pole to the
+/// other: a disk chart for flattening tests.
+#[cfg(test)]
+pub(crate) fn cut_open_sphere(subdivisions: usize) -> TriMesh {
+    let sphere = crate::mesh::shapes::icosphere(subdivisions);
+    let topo = Topology::build(&sphere).unwrap();
+    let graph = EdgeGraph::new(&topo);
+    let length = graph.lengths(&sphere.positions);
+    let paths = ShortestPaths::from_sources(&graph, &length, &[(VertexId(0), 0)]);
+    let far = (0..sphere.num_vertices())
+        .max_by(|&a, &b| paths.distance[a].total_cmp(&paths.distance[b]))
+        .unwrap();
+    let seams = paths.path_to_source(&graph, VertexId::from(far));
+    let cut = cut(&sphere, &seams);
+    TriMesh::new(
+        cut.origin
+            .iter()
+            .map(|&v| sphere.positions[v as usize])
+            .collect(),
+        cut.triangles,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

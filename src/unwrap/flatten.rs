@@ -1,12 +1,17 @@
-//! Flatten a disk-shaped chart: ABF++ angles laid out by least squares, or
-//! LSCM when ABF++ fails or its layout folds over (reported, never silent).
+//! Flatten a disk-shaped chart: ABF++ angles laid out by least squares;
+//! when ABF++ fails or its layout flips a triangle, boundary first
+//! flattening (the conformal map Seamster's estimate describes), and LSCM
+//! last. A fallback is reported with the reason, never silent. Whatever
+//! flattened the chart, area balancing follows (`balance`).
 
 use glam::DVec2;
 use serde::Serialize;
 
 use super::abf::{self, AbfOptions};
 use super::balance::balance;
+use super::conformal::boundary_first;
 use super::layout;
+use super::untangle::untangle;
 use crate::error::Result;
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh};
@@ -17,11 +22,28 @@ pub enum Method {
     AbfPlusPlus {
         iterations: usize,
         residual: f64,
+        /// Triangles the layout flipped and `untangle` unfolded.
+        unfolded: usize,
         /// Area balancing rounds kept after the layout (`balance`).
         balance_rounds: usize,
     },
-    /// LSCM, because ABF++ could not be used: `reason` says why.
-    Lscm { reason: String },
+    /// Boundary first flattening, because ABF++ could not be used:
+    /// `reason` says why; `flipped` triangles stay flipped (when even
+    /// LSCM flipped more).
+    BoundaryFirst {
+        reason: String,
+        unfolded: usize,
+        flipped: usize,
+        balance_rounds: usize,
+    },
+    /// LSCM, because neither ABF++ nor boundary first flattening gave a
+    /// layout without flips and LSCM flipped fewer: `reason` says why;
+    /// `flipped` triangles stay flipped.
+    Lscm {
+        reason: String,
+        unfolded: usize,
+        flipped: usize,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -45,31 +67,119 @@ pub fn flipped(chart: &TriMesh, uv: &[DVec2]) -> usize {
 }
 
 pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Flattened> {
+    // A layout that flipped a few slivers is unfolded vertex by vertex;
+    // one without flips then has its area evened out.
+    let unfold = |mut uv: Vec<DVec2>| {
+        // No triangle thinner than a thousandth of its own area at the
+        // layout's scale.
+        let area_3d: Vec<f64> = (0..chart.num_faces())
+            .map(|f| 2.0 * chart.face_area(f))
+            .collect();
+        let area_uv: f64 = chart
+            .triangles
+            .iter()
+            .map(|t| {
+                let q = t.map(|v| uv[v as usize]);
+                (q[1] - q[0]).perp_dot(q[2] - q[0]).abs()
+            })
+            .sum();
+        let scale = area_uv / area_3d.iter().sum::<f64>().max(1e-300);
+        let least: Vec<f64> = area_3d.iter().map(|a| 1e-3 * a * scale).collect();
+        let before = flipped(chart, &uv);
+        let left = untangle(&chart.triangles, &mut uv, &least, 10);
+        (uv, before.saturating_sub(left), left)
+    };
+    let balanced = |uv: Vec<DVec2>| {
+        balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0))
+    };
     let solved = abf::solve(chart, topo, opts).and_then(|solution| {
         let uv = layout::from_angles(chart, topo, &solution.angles)?;
         Ok((solution, uv))
     });
     let reason = match solved {
-        Ok((solution, uv)) => {
-            let flips = flipped(chart, &uv);
-            if flips == 0 {
-                let (uv, balance_rounds) =
-                    balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0));
+        Ok((solution, uv)) => match unfold(uv) {
+            (uv, unfolded, 0) => {
+                let (uv, balance_rounds) = balanced(uv);
                 return Ok(Flattened {
                     uv,
                     method: Method::AbfPlusPlus {
                         iterations: solution.iterations,
                         residual: solution.residual,
+                        unfolded,
                         balance_rounds,
                     },
                 });
             }
-            format!("the ABF++ layout flipped {flips} triangles")
-        }
+            (_, _, left) => format!("the ABF++ layout flipped {left} triangles"),
+        },
         Err(e) => e.to_string(),
     };
-    Ok(Flattened {
-        uv: layout::from_angles(chart, topo, &corner_angles(chart))?,
-        method: Method::Lscm { reason },
+    // Boundary first flattening, or, when it leaves flips, whichever of it
+    // and LSCM leaves fewer.
+    let (bff, reason) = match boundary_first(chart, topo).map(unfold) {
+        Ok((uv, unfolded, 0)) => {
+            let (uv, balance_rounds) = balanced(uv);
+            return Ok(Flattened {
+                uv,
+                method: Method::BoundaryFirst {
+                    reason,
+                    unfolded,
+                    flipped: 0,
+                    balance_rounds,
+                },
+            });
+        }
+        Ok(bff) => (Some(bff), reason),
+        Err(e) => (None, format!("{reason}; boundary first flattening: {e}")),
+    };
+    let lscm = unfold(layout::from_angles(chart, topo, &corner_angles(chart))?);
+    Ok(match bff {
+        Some((uv, unfolded, left)) if left <= lscm.2 => {
+            let (uv, balance_rounds) = balanced(uv);
+            Flattened {
+                method: Method::BoundaryFirst {
+                    reason,
+                    unfolded,
+                    flipped: flipped(chart, &uv),
+                    balance_rounds,
+                },
+                uv,
+            }
+        }
+        _ => Flattened {
+            uv: lscm.0,
+            method: Method::Lscm {
+                reason,
+                unfolded: lscm.1,
+                flipped: lscm.2,
+            },
+        },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn when_abf_cannot_run_boundary_first_flattening_takes_over_without_flips() {
+        // A sphere cut open pole to pole, and ABF++ given no Newton step.
+        let chart = crate::unwrap::cutgraph::cut_open_sphere(3);
+        let chart_topo = Topology::build(&chart).unwrap();
+        let opts = AbfOptions {
+            max_iterations: 0,
+            ..AbfOptions::default()
+        };
+        let flat = flatten(&chart, &chart_topo, &opts).unwrap();
+        match &flat.method {
+            Method::BoundaryFirst {
+                reason, flipped, ..
+            } => {
+                assert!(reason.contains("ABF++"), "{reason}");
+                assert_eq!(*flipped, 0);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(super::flipped(&chart, &flat.uv), 0);
+    }
 }

@@ -19,6 +19,7 @@ pub mod overlap;
 pub mod seamster;
 pub mod steiner;
 pub mod terminals;
+pub mod untangle;
 pub mod visibility;
 
 use std::time::Instant;

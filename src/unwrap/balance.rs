@@ -7,7 +7,8 @@
 //! from the conformal optimum costs conformality only to second order and
 //! gains area to first order: with a small weight on area, the texture's
 //! scale evens out for a barely measurable loss of angle (bunny: mean
-//! |log area ratio| 0.218 -> 0.18, mean sigma1/sigma2 1.014 -> 1.018).
+//! |log area ratio| 0.218 -> 0.187, mean sigma1/sigma2 1.014 -> 1.016 at the
+//! default weight, 0.02).
 //!
 //! Energy, per triangle t of area A_t with Jacobian J_t (surface to uv):
 //! A_t (|J_t - L_t|^2 + lambda (a^2 + b^2 - 1)^2), L_t = [[a, b], [-b, a]]

@@ -10,6 +10,7 @@ use organtex::mesh::{Components, Topology, TriMesh};
 use organtex::progress::{Progress, Silent};
 use organtex::scene::bake::{BakeOptions, BakeReport, bake};
 use organtex::scene::uterus::{self, CavityParams};
+use organtex::synth::volume::Volume;
 use organtex::{Error, Result};
 
 fn root() -> PathBuf {
@@ -60,6 +61,13 @@ name = "myoma-1"
 texture = "ihc-glands"
 tile_size = 6.0
 overlap = 2.0
+
+[node.interior]
+texture = "ihc-glands"
+block_size = 5.0
+
+[bake]
+interior_voxels = 16
 "#,
         offset[0], offset[1]
     )
@@ -234,10 +242,28 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     .unwrap();
     assert_eq!(
         files_in(out.path()),
-        ["preview.png", "report.json", "scene.glb"]
+        ["interior", "preview.png", "report.json", "scene.glb"]
     );
     let r = &baked.report;
     assert_eq!(r.mode, "layered");
+    // The uterus's interior: a block that tiles, at the scene's scale.
+    assert_eq!(r.interiors.len(), 1);
+    let interior = &r.interiors[0];
+    assert_eq!((interior.node.as_str(), interior.voxels), ("uterus", 64));
+    let block = Volume::read_nrrd(&out.path().join(&interior.file)).unwrap();
+    assert_eq!(block.size, [64; 3]);
+    assert!(
+        (block.spacing - 10.0 / 64.0).abs() < 1e-12,
+        "{}",
+        block.spacing
+    );
+    for axis in 0..3 {
+        assert!(
+            block.seam(axis) <= 1.15,
+            "axis {axis}: {}",
+            block.seam(axis)
+        );
+    }
     let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();
     assert_eq!(facets, ["wall", "myoma-front", "myoma-back", "polyp"]);
     for f in &r.facets {
@@ -415,11 +441,12 @@ fn a_bake_gives_the_same_bytes_on_one_or_two_threads() {
         (
             std::fs::read(out.join("scene.glb")).unwrap(),
             std::fs::read(out.join("preview.png")).unwrap(),
+            std::fs::read(out.join("interior/uterus.nrrd")).unwrap(),
         )
     };
     assert!(
         run(1, "one") == run(2, "two"),
-        "the .glb or preview differs with the thread count"
+        "the .glb, preview or interior differs with the thread count"
     );
 }
 
@@ -440,7 +467,7 @@ impl Progress for CancelAt {
 fn a_cancelled_bake_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_file(dir.path(), "s.toml", &small_scene(0.0, 10.0, [0.0, 0.0]));
-    for stage in ["visibility", "facets", "writing"] {
+    for stage in ["visibility", "facets", "block synthesis", "writing"] {
         let out = dir.path().join(format!("out-{stage}"));
         std::fs::create_dir(&out).unwrap();
         std::fs::write(out.join("scene.glb"), b"an earlier bake").unwrap();
@@ -529,6 +556,16 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
     assert!(err.contains("unknown field `shine`"), "{err}");
     assert!(
         err.contains(&format!("line {}", line_of(&scene, "shine"))),
+        "{err}"
+    );
+
+    let (err, scene) = bake_error(&base.replace("interior_voxels = 16", "interior_voxels = 20"));
+    assert!(
+        err.contains("[bake] interior_voxels: 20 is not a multiple of 16"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, "interior_voxels"))),
         "{err}"
     );
 

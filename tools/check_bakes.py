@@ -10,7 +10,9 @@ For each scene (layered; the default scene also with --atlas 2048):
   blend layers carrying vertex alpha;
 - report.json's contrast figures must be within the targets: seams and
   facet borders <= 1.2 blended, and above that unblended wherever seams or
-  borders exist (the blend must be what hides them).
+  borders exist (the blend must be what hides them);
+- every interior block report.json lists must be an RGB uint8 NRRD of the
+  listed size and spacing.
 
 Usage: tools/check_bakes.py [--organtex target/release/organtex] [--out DIR]
 Exits 1 on any failure.
@@ -107,6 +109,24 @@ def check_figures(name, report, failures):
             failures.append(f"{name}: {what} shows no less with blending ({blended:.2f} vs {plain:.2f})")
 
 
+def check_interiors(target, report, failures):
+    """Every interior block the report lists is an RGB uint8 NRRD of the
+    listed size and voxel spacing, with all its voxel bytes (what 3D Slicer
+    and ITK need to open it)."""
+    for line in report.get("interiors", []):
+        path = target / line["file"]
+        data = path.read_bytes() if path.exists() else b""
+        header, _, body = data.partition(b"\n\n")
+        fields = dict(l.split(": ", 1) for l in header.decode(errors="replace").splitlines()[1:] if ": " in l)
+        n = line["voxels"]
+        spacing = [float(x) for x in fields.get("spacings", "").split()[1:]] or [0.0]
+        if (not data.startswith(b"NRRD000") or fields.get("type") != "uint8" or fields.get("sizes") != f"3 {n} {n} {n}"
+                or len(body) != 3 * n ** 3 or any(abs(x - line["voxel_size"]) > 1e-9 for x in spacing)):
+            failures.append(f"{path}: not the {n}^3 RGB block of {line['voxel_size']} units the report lists")
+        else:
+            print(f"  interior {line['node']}: {n}^3 voxels of {line['voxel_size']} units")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
@@ -136,6 +156,7 @@ def main():
         check_json(glb, report, failures)
         print(f"  trimesh loaded {count} primitives; baked in {report['timings']['total_s']:.1f} s")
         check_figures(name, report, failures)
+        check_interiors(target, report, failures)
 
     # A cut surface from `organtex section`: a small block, an oblique plane
     # through the bunny; trimesh must load it textured too.

@@ -457,6 +457,9 @@ impl Viewer {
 
     /// Object units one block spans: the scene's interior setting, else a
     /// third of the scene's diagonal.
+    /// Mesh units one interior block covers, and where it starts: the
+    /// origin, the placement the bake gives `interior/NODE.nrrd` (the
+    /// viewer's block is a quicker 32^3 one).
     fn block_units(&self) -> Option<(f64, DVec3)> {
         let doc = self.doc.as_ref()?;
         let (lo, hi) = doc.bounds()?;
@@ -466,7 +469,7 @@ impl Viewer {
             .iter()
             .find_map(|n| n.interior.as_ref().map(|i| i.block_size))
             .unwrap_or((hi - lo).length() / 3.0);
-        Some((units, lo))
+        Some((units, DVec3::ZERO))
     }
 
     fn set_block(&mut self, volume: Volume) {

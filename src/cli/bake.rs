@@ -101,4 +101,14 @@ fn print(baked: &Baked) {
         Some(p) => println!("      {}", p.display()),
         None => eprintln!("warning: preview.png not written: {}", r.preview_renderer),
     }
+    for i in &r.interiors {
+        println!(
+            "      {} ({} interior: {}^3 voxels of {} units, from {})",
+            baked.dir.join(&i.file).display(),
+            i.node,
+            i.voxels,
+            i.voxel_size,
+            i.texture
+        );
+    }
 }

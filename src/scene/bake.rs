@@ -1,7 +1,8 @@
-//! The bake: a scene file in, DIR/scene.glb, DIR/report.json and
-//! DIR/preview.png (drawn by `crate::render`) out. Everything is computed in memory first and the
-//! files are written last, each atomically, so a failed or cancelled bake
-//! leaves DIR as it was.
+//! The bake: a scene file in, DIR/scene.glb, DIR/report.json,
+//! DIR/preview.png (drawn by `crate::render`) and, for every node with an
+//! interior, DIR/interior/NODE.nrrd out. Everything is computed in memory
+//! first and the files are written last, each atomically, so a failed or
+//! cancelled bake leaves DIR as it was.
 //!
 //! The contrast figures (how much seams and facet borders show) are
 //! measured on what the output shows, blended and unblended, so the report
@@ -22,6 +23,8 @@ use super::{file, gltf};
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
+use crate::solid::interior_block;
+use crate::synth::volume::Volume;
 
 /// How a bake runs.
 #[derive(Clone, Debug)]
@@ -40,6 +43,20 @@ impl Default for BakeOptions {
             preview: [960, 720],
         }
     }
+}
+
+/// A node's interior block: a solid texture that tiles space from the
+/// origin, one voxel `voxel_size` mesh units, for the simulator's cuts
+/// (`solid::plane_section` with `Placement::new(origin 0, voxel_size)`).
+#[derive(Clone, Debug, Serialize)]
+pub struct InteriorLine {
+    pub node: String,
+    /// The tissue it was synthesised from.
+    pub texture: String,
+    /// Relative to the bake's folder.
+    pub file: PathBuf,
+    pub voxels: usize,
+    pub voxel_size: f64,
 }
 
 /// One facet's line of the report.
@@ -68,6 +85,8 @@ pub struct BorderLine {
 pub struct Timings {
     /// Meshes, visibility, unwraps, bands and rings.
     pub build_s: f64,
+    /// Interior blocks.
+    pub interior_s: f64,
     /// Atlases (in atlas mode) and contrast figures.
     pub contrast_s: f64,
     /// glTF encoding and preview.
@@ -94,12 +113,15 @@ pub struct BakeReport {
     pub preview_renderer: String,
     pub facets: Vec<FacetLine>,
     pub borders: Vec<BorderLine>,
+    pub interiors: Vec<InteriorLine>,
     pub timings: Timings,
 }
 
 /// Where the bake wrote its files, and its report.
 #[derive(Clone, Debug)]
 pub struct Baked {
+    /// The folder baked into.
+    pub dir: PathBuf,
     pub glb: PathBuf,
     pub report_json: PathBuf,
     /// None when no GPU adapter could draw it.
@@ -125,6 +147,10 @@ pub fn bake(
     let spec = file::load(scene)?;
     let baked = build_scene(&spec, opts.atlas.is_some(), progress)?;
     let build_s = start.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let interiors = interiors(&baked, progress)?;
+    let interior_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let blended = match opts.atlas {
@@ -212,8 +238,10 @@ pub fn bake(
         preview_renderer,
         facets,
         borders,
+        interiors: interiors.iter().map(|(line, _)| line.clone()).collect(),
         timings: Timings {
             build_s,
+            interior_s,
             contrast_s,
             output_s,
             total_s: start.elapsed().as_secs_f64(),
@@ -222,6 +250,7 @@ pub fn bake(
 
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let baked = Baked {
+        dir: out.to_path_buf(),
         glb: out.join("scene.glb"),
         report_json: out.join("report.json"),
         preview: picture.as_ref().map(|_| out.join("preview.png")),
@@ -233,7 +262,67 @@ pub fn bake(
     if let (Some(path), Some(picture)) = (&baked.preview, picture) {
         write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
     }
+    for (line, volume) in &interiors {
+        let path = out.join(&line.file);
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        volume.write_nrrd(&path)?;
+    }
     Ok(baked)
+}
+
+/// Every node's interior block, synthesised from its tissue's colour
+/// texture (seed 004, 3.3), `[bake] interior_voxels` a side.
+fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<(InteriorLine, Volume)>> {
+    let n = scene.spec.bake.interior_voxels;
+    let mut out = Vec::new();
+    for (k, node) in scene.spec.nodes.iter().enumerate() {
+        let Some(interior) = &node.interior else {
+            continue;
+        };
+        let colour = scene.tissues.colour.get(&interior.texture).ok_or_else(|| {
+            Error::invalid(format!(
+                "node '{}': interior texture '{}' was not built",
+                node.name, interior.texture
+            ))
+        })?;
+        let mut volume = interior_block(colour, n, k as u64, progress)?;
+        volume.spacing = interior.block_size / n as f64;
+        // Names distinct as nodes may meet as file names ("a b", "a_b").
+        let mut stem = file_name(&node.name);
+        if out.iter().any(|(l, _): &(InteriorLine, Volume)| {
+            l.file.file_stem() == Some(std::ffi::OsStr::new(&stem))
+        }) {
+            stem = format!("{stem}-{k}");
+        }
+        let file = PathBuf::from("interior").join(format!("{stem}.nrrd"));
+        out.push((
+            InteriorLine {
+                node: node.name.clone(),
+                texture: interior.texture.clone(),
+                file,
+                voxels: n,
+                voxel_size: volume.spacing,
+            },
+            volume,
+        ));
+    }
+    Ok(out)
+}
+
+/// A node name as a file name: letters, digits, '-' and '_' kept, the rest
+/// '_'.
+fn file_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 fn texture_density(scene: &BakedScene) -> f64 {

@@ -123,6 +123,9 @@ pub fn ensure_tissues(
                 needed.push((o.clone(), Output::Overlay));
             }
         }
+        if let Some(interior) = &node.interior {
+            needed.push((interior.texture.clone(), Output::Colour));
+        }
     }
     let mut tissues = Tissues::default();
     let mut checked: Vec<&str> = Vec::new();

@@ -125,6 +125,10 @@ pub struct BakeSettings {
     /// Orthographic views for seam visibility when the scene has no cameras.
     #[serde(default = "default_views")]
     pub views: usize,
+    /// Voxels a side of each node's interior block (a multiple of 16, at
+    /// most 256).
+    #[serde(default = "default_interior_voxels")]
+    pub interior_voxels: usize,
 }
 
 fn default_band() -> usize {
@@ -133,12 +137,16 @@ fn default_band() -> usize {
 fn default_views() -> usize {
     128
 }
+fn default_interior_voxels() -> usize {
+    64
+}
 
 impl Default for BakeSettings {
     fn default() -> Self {
         BakeSettings {
             seam_band: default_band(),
             views: default_views(),
+            interior_voxels: default_interior_voxels(),
         }
     }
 }
@@ -264,6 +272,15 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
         nodes: Vec::new(),
         bake: file.bake.clone().unwrap_or_default(),
     };
+    let voxels = spec.bake.interior_voxels;
+    if !(16..=256).contains(&voxels) || !voxels.is_multiple_of(16) {
+        let msg =
+            format!("[bake] interior_voxels: {voxels} is not a multiple of 16 from 16 to 256");
+        return Err(match text.find("interior_voxels") {
+            Some(at) => Error::at_line(path, line_of(&text, at), msg),
+            None => Error::format(path, msg),
+        });
+    }
     for c in &spec.cameras {
         if !(1.0..=170.0).contains(&c.fov) || c.position == c.look_at {
             return Err(Error::format(

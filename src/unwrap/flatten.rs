@@ -1,7 +1,9 @@
 //! Flatten a disk-shaped chart: ABF++ angles laid out by least squares;
 //! when ABF++ fails or its layout flips a triangle, boundary first
 //! flattening (the conformal map Seamster's estimate describes), and LSCM
-//! last. A fallback is reported with the reason, never silent. Whatever
+//! last. When ABF++ only stops at its step cap (raw scans), its best
+//! iterate's layout and boundary first flattening's compete: the more
+//! conformal one without flips is kept. A fallback is reported with the reason, never silent. Whatever
 //! flattened the chart, area balancing follows (`balance`).
 
 use glam::DVec2;
@@ -11,6 +13,7 @@ use super::abf::{self, AbfOptions};
 use super::balance::balance;
 use super::conformal::boundary_first;
 use super::layout;
+use super::metrics;
 use super::untangle::untangle;
 use crate::error::Result;
 use crate::mesh::curvature::corner_angles;
@@ -22,6 +25,10 @@ pub enum Method {
     AbfPlusPlus {
         iterations: usize,
         residual: f64,
+        /// False when ABF++ stopped at its step cap: the angles are its
+        /// best iterate, kept because their layout was more conformal than
+        /// boundary first flattening's.
+        converged: bool,
         /// Triangles the layout flipped and `untangle` unfolded.
         unfolded: usize,
         /// Area balancing rounds kept after the layout (`balance`).
@@ -66,6 +73,17 @@ pub fn flipped(chart: &TriMesh, uv: &[DVec2]) -> usize {
         .count()
 }
 
+/// A chart layout's conf_mean figure (`metrics`).
+pub fn conf_mean(chart: &TriMesh, uv: &[DVec2]) -> f64 {
+    metrics::conf_mean((0..chart.num_faces()).map(|f| {
+        let corners = chart.triangles[f].map(|v| uv[v as usize]);
+        (
+            chart.face_area(f),
+            metrics::jacobian(chart.corners(f), corners),
+        )
+    }))
+}
+
 pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Flattened> {
     // A layout that flipped a few slivers is unfolded vertex by vertex;
     // one without flips then has its area evened out.
@@ -96,27 +114,61 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         let uv = layout::from_angles(chart, topo, &solution.angles)?;
         Ok((solution, uv))
     });
+    let abf_method = |solution: &abf::AbfSolution, unfolded, balance_rounds| Method::AbfPlusPlus {
+        iterations: solution.iterations,
+        residual: solution.residual,
+        converged: solution.converged,
+        unfolded,
+        balance_rounds,
+    };
+    // An unconverged ABF++ layout without flips, held against boundary
+    // first flattening's.
+    let mut unconverged = None;
     let reason = match solved {
         Ok((solution, uv)) => match unfold(uv) {
-            (uv, unfolded, 0) => {
+            (uv, unfolded, 0) if solution.converged => {
                 let (uv, balance_rounds) = balanced(uv);
                 return Ok(Flattened {
                     uv,
-                    method: Method::AbfPlusPlus {
-                        iterations: solution.iterations,
-                        residual: solution.residual,
-                        unfolded,
-                        balance_rounds,
-                    },
+                    method: abf_method(&solution, unfolded, balance_rounds),
                 });
             }
-            (_, _, left) => format!("the ABF++ layout flipped {left} triangles"),
+            (uv, unfolded, left) => {
+                let mut reason = String::new();
+                if !solution.converged {
+                    reason = format!(
+                        "ABF++ did not converge in {} Newton steps (residual {:.2e}); ",
+                        solution.iterations, solution.residual
+                    );
+                }
+                if left == 0 {
+                    reason += "its best layout was less conformal";
+                    unconverged = Some((solution, uv, unfolded));
+                } else {
+                    reason += &format!("the ABF++ layout flipped {left} triangles");
+                }
+                reason
+            }
         },
         Err(e) => e.to_string(),
     };
+    let bff = boundary_first(chart, topo).map(unfold);
+    if let Some((solution, uv, unfolded)) = unconverged {
+        let abf_conf = conf_mean(chart, &uv);
+        match &bff {
+            Ok((bff_uv, _, 0)) if conf_mean(chart, bff_uv) < abf_conf => {}
+            _ => {
+                let (uv, balance_rounds) = balanced(uv);
+                return Ok(Flattened {
+                    uv,
+                    method: abf_method(&solution, unfolded, balance_rounds),
+                });
+            }
+        }
+    }
     // Boundary first flattening, or, when it leaves flips, whichever of it
     // and LSCM leaves fewer.
-    let (bff, reason) = match boundary_first(chart, topo).map(unfold) {
+    let (bff, reason) = match bff {
         Ok((uv, unfolded, 0)) => {
             let (uv, balance_rounds) = balanced(uv);
             return Ok(Flattened {
@@ -162,24 +214,42 @@ mod tests {
     use super::*;
 
     #[test]
-    fn when_abf_cannot_run_boundary_first_flattening_takes_over_without_flips() {
-        // A sphere cut open pole to pole, and ABF++ given no Newton step.
+    fn an_unconverged_abf_competes_with_boundary_first_flattening() {
+        // A sphere cut open pole to pole, and ABF++ given no Newton step:
+        // its best iterate is the 3D angles.
         let chart = crate::unwrap::cutgraph::cut_open_sphere(3);
         let chart_topo = Topology::build(&chart).unwrap();
         let opts = AbfOptions {
             max_iterations: 0,
             ..AbfOptions::default()
         };
-        let flat = flatten(&chart, &chart_topo, &opts).unwrap();
-        match &flat.method {
-            Method::BoundaryFirst {
-                reason, flipped, ..
+        let unbalanced = AbfOptions {
+            balance_rounds: 0,
+            ..opts.clone()
+        };
+        let flat = flatten(&chart, &chart_topo, &unbalanced).unwrap();
+        assert_eq!(super::flipped(&chart, &flat.uv), 0);
+        let bff = boundary_first(&chart, &chart_topo).unwrap();
+        let angles = layout::from_angles(&chart, &chart_topo, &corner_angles(&chart)).unwrap();
+        let (kept, other) = match &flat.method {
+            Method::AbfPlusPlus {
+                converged,
+                iterations,
+                ..
             } => {
-                assert!(reason.contains("ABF++"), "{reason}");
-                assert_eq!(*flipped, 0);
+                assert!(!converged);
+                assert_eq!(*iterations, 0);
+                (conf_mean(&chart, &flat.uv), conf_mean(&chart, &bff))
+            }
+            Method::BoundaryFirst { reason, .. } => {
+                assert!(reason.contains("did not converge"), "{reason}");
+                (conf_mean(&chart, &flat.uv), conf_mean(&chart, &angles))
             }
             other => panic!("{other:?}"),
-        }
-        assert_eq!(super::flipped(&chart, &flat.uv), 0);
+        };
+        assert!(kept <= other, "kept conf {kept}, other {other}");
+        // With balancing, the kept layout still has no flips.
+        let balanced = flatten(&chart, &chart_topo, &opts).unwrap();
+        assert_eq!(super::flipped(&chart, &balanced.uv), 0);
     }
 }

@@ -104,6 +104,24 @@ pub fn jacobian(p: [DVec3; 3], u: [DVec2; 3]) -> (f64, f64, f64) {
     (q + r, (q - r).abs(), du1.perp_dot(du2) / 2.0)
 }
 
+/// The conf_mean figure: sigma1 / sigma2 averaged with the 3D areas as
+/// weights, over (3D area, `jacobian`) per face; faces of no area in 3D or
+/// uv are left out.
+pub fn conf_mean(faces: impl Iterator<Item = (f64, (f64, f64, f64))>) -> f64 {
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for (area, (s1, s2, _)) in faces {
+        if s2 > 0.0 && area > 0.0 {
+            sum += area * s1 / s2;
+            weight += area;
+        }
+    }
+    if weight > 0.0 {
+        sum / weight
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Every figure of `mesh`'s uv layer; `edge_visibility` by `topo`'s edges.
 pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Option<UvMetrics> {
     let layer = mesh.uvs.as_ref()?;
@@ -156,14 +174,8 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
         overlapping[g as usize] = true;
     }
 
-    let mut conf = 0.0;
-    let mut conf_weight = 0.0;
     let mut area_log = 0.0;
-    for (f, &(s1, s2, signed)) in jac.iter().enumerate() {
-        if s2 > 0.0 && area_3d[f] > 0.0 {
-            conf += area_3d[f] * s1 / s2;
-            conf_weight += area_3d[f];
-        }
+    for (f, &(_, _, signed)) in jac.iter().enumerate() {
         if signed != 0.0 && area_3d[f] > 0.0 {
             area_log += area_3d[f] * (signed.abs() * scale2 / area_3d[f]).ln().abs();
         }
@@ -187,11 +199,7 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
         flips,
         overlaps: overlapping.iter().filter(|&&o| o).count(),
         degenerate,
-        conf_mean: if conf_weight > 0.0 {
-            conf / conf_weight
-        } else {
-            f64::INFINITY
-        },
+        conf_mean: conf_mean(area_3d.iter().copied().zip(jac.iter().copied())),
         area_log: area_log / total_3d,
         seam_length,
         seam_ratio: seam_length / root_area,

@@ -229,3 +229,23 @@ fn a_noisy_scan_flattens_with_abf_and_its_seams_do_not_chase_the_noise() {
     let m = &u.report.metrics;
     assert!(m.seam_ratio <= 20.0 && m.area_log <= 0.25, "{m:?}");
 }
+
+#[test]
+fn split_overlaps_leaves_a_few_disk_charts_that_do_not_overlap() {
+    // The one-chart layout of the holed bunny folds over itself in a few
+    // places (87 faces overlap); an atlas needs it split.
+    let mesh = io::read(&data("bunny10k_textured.obj")).unwrap();
+    let opts = UnwrapOptions {
+        split_overlaps: true,
+        ..UnwrapOptions::default()
+    };
+    let whole = run(&mesh);
+    assert!(whole.report.metrics.overlaps > 0);
+    let u = unwrap(&mesh, &opts, &Silent).unwrap();
+    let m = &u.report.metrics;
+    assert_eq!(m.overlaps, 0, "{m:?}");
+    // A flap per fold, not a chart per overlapping face.
+    assert!((2..=8).contains(&m.charts), "{m:?}");
+    assert_disk_charts(&u, m.charts);
+    assert!(m.conf_mean <= 1.08 && m.area_log <= 0.25, "{m:?}");
+}

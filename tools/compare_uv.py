@@ -21,6 +21,8 @@ face overlapping another in uv.
 import argparse
 import json
 import multiprocessing
+import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -158,6 +160,8 @@ def run_pymeshlab_voronoi(organtex, mesh, tmp):
 
 
 def _child(queue, run, args):
+    # Its own process group, so a timeout also ends the tool it started.
+    os.setsid()
     try:
         queue.put(run(*args))
     except Exception as e:  # a peer failing on a mesh is a result too
@@ -176,6 +180,10 @@ def isolated(run, args, timeout):
     except Exception:
         return (float("nan"), {"error": f"no result within {timeout} s" if child.is_alive() else "crashed"})
     finally:
+        try:
+            os.killpg(child.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
         child.kill()
         child.join()
 

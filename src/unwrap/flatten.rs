@@ -3,8 +3,9 @@
 //! flattening (the conformal map Seamster's estimate describes), and LSCM
 //! last. When ABF++ only stops at its step cap (raw scans), its best
 //! iterate's layout and boundary first flattening's compete: the more
-//! conformal one without flips is kept. A fallback is reported with the reason, never silent. Whatever
-//! flattened the chart, area balancing follows (`balance`).
+//! conformal one without flips is kept. A fallback is reported with the
+//! reason, never silent. Whatever flattened the chart, area balancing
+//! follows (`balance`).
 
 use glam::DVec2;
 use serde::Serialize;
@@ -26,8 +27,8 @@ pub enum Method {
         iterations: usize,
         residual: f64,
         /// False when ABF++ stopped at its step cap: the angles are its
-        /// best iterate, kept because their layout was more conformal than
-        /// boundary first flattening's.
+        /// best iterate, kept because their layout has no flips and boundary
+        /// first flattening's flipped or was less conformal.
         converged: bool,
         /// Triangles the layout flipped and `untangle` unfolded.
         unfolded: usize,

@@ -201,10 +201,10 @@ fn flatten_part(chart: &TriMesh, abf: &AbfOptions, rounds: usize) -> Result<Vec<
 
 /// The first of `pairs` for every two patches that overlap, a patch being
 /// faces in some overlapping pair that are joined across edges. A fold of
-/// two patches gives as many pairs as their faces cross (a 10k-face dragon
-/// scan: 18814 pairs, about 100 patch pairs), and one flap separates them
-/// all: cutting a flap per pair would search the surface thousands of times
-/// only to find each flap inside the first.
+/// two patches gives as many pairs as their faces cross, and one flap
+/// usually separates them all (what it leaves, the next round finds): a
+/// flap search per pair searched a 10k-face dragon scan's surface 3032
+/// times for 45 flaps.
 fn one_pair_per_patch_pair(topo: &Topology, pairs: &[[u32; 2]]) -> Vec<[u32; 2]> {
     let mut involved = vec![false; topo.num_faces()];
     for &f in pairs.iter().flatten() {

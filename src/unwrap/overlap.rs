@@ -15,6 +15,7 @@
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use super::abf::AbfOptions;
 use super::flatten::{Method, flatten};
@@ -186,17 +187,22 @@ fn flatten_part(chart: &TriMesh, abf: &AbfOptions, rounds: usize) -> Result<Vec<
             None => return Ok(whole()),
         }
     }
-    let mut out = Vec::new();
-    for (faces, part, origin) in parts {
-        for sub in flatten_part(&part, abf, rounds - 1)? {
-            out.push(FlatChart {
-                faces: sub.faces.iter().map(|&f| faces[f as usize].0).collect(),
-                origin: sub.origin.iter().map(|&v| origin[v as usize]).collect(),
-                ..sub
-            });
-        }
-    }
-    Ok(out)
+    // The parts flatten independently; collected in order, so the result
+    // does not depend on the thread count.
+    let flattened: Vec<Vec<FlatChart>> = parts
+        .into_par_iter()
+        .map(|(faces, part, origin)| {
+            Ok(flatten_part(&part, abf, rounds - 1)?
+                .into_iter()
+                .map(|sub| FlatChart {
+                    faces: sub.faces.iter().map(|&f| faces[f as usize].0).collect(),
+                    origin: sub.origin.iter().map(|&v| origin[v as usize]).collect(),
+                    ..sub
+                })
+                .collect())
+        })
+        .collect::<Result<_>>()?;
+    Ok(flattened.into_iter().flatten().collect())
 }
 
 /// The first of `pairs` for every two patches that overlap, a patch being

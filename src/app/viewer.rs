@@ -140,9 +140,9 @@ struct SceneTarget {
 }
 
 /// Pixels of the interactive target per pixel of the full one, along
-/// each axis. On a software rasteriser (llvmpipe) a drag frame costs
-/// about 130 ms at full resolution and 90 ms at half; the full picture
-/// follows one frame after the mouse stops.
+/// each axis. On a software rasteriser (llvmpipe) a drag frame of the
+/// default scene costs about 146 ms at full resolution and 100 ms at half;
+/// the full picture follows one frame after the mouse stops.
 const INTERACTIVE_SCALE: u32 = 2;
 
 /// Error out of the screenshot, reported by `run` after the window closes.
@@ -455,9 +455,8 @@ impl Viewer {
         }
     }
 
-    /// Object units one block spans: the scene's interior setting, else a
-    /// third of the scene's diagonal.
-    /// Mesh units one interior block covers, and where it starts: the
+    /// Mesh units one interior block covers (the scene's interior setting,
+    /// else a third of the scene's diagonal), and where it starts: the
     /// origin, the placement the bake gives `interior/NODE.nrrd` (the
     /// viewer's block is a quicker 32^3 one).
     fn block_units(&self) -> Option<(f64, DVec3)> {

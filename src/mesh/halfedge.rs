@@ -147,6 +147,12 @@ impl Topology {
     pub fn edge_halfedge(&self, e: EdgeId) -> HalfedgeId {
         self.edge_halfedge[e.idx()]
     }
+    /// The faces on either side of edge `e`; `None` on the boundary.
+    #[inline]
+    pub fn edge_faces(&self, e: EdgeId) -> Option<[FaceId; 2]> {
+        let h = self.edge_halfedge(e);
+        self.twin(h).map(|t| [self.face(h), self.face(t)])
+    }
     #[inline]
     pub fn is_boundary_edge(&self, e: EdgeId) -> bool {
         self.twin(self.edge_halfedge(e)).is_none()

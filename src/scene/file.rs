@@ -15,6 +15,7 @@ use toml::Spanned;
 
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
+use crate::synth::block::MAX_BLOCK;
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -126,7 +127,7 @@ pub struct BakeSettings {
     #[serde(default = "default_views")]
     pub views: usize,
     /// Voxels a side of each node's interior block (a multiple of 16, at
-    /// most 256).
+    /// most `MAX_BLOCK`).
     #[serde(default = "default_interior_voxels")]
     pub interior_voxels: usize,
 }
@@ -273,9 +274,10 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
         bake: file.bake.clone().unwrap_or_default(),
     };
     let voxels = spec.bake.interior_voxels;
-    if !(16..=256).contains(&voxels) || !voxels.is_multiple_of(16) {
-        let msg =
-            format!("[bake] interior_voxels: {voxels} is not a multiple of 16 from 16 to 256");
+    if !(16..=MAX_BLOCK).contains(&voxels) || !voxels.is_multiple_of(16) {
+        let msg = format!(
+            "[bake] interior_voxels: {voxels} is not a multiple of 16 from 16 to {MAX_BLOCK}"
+        );
         return Err(match text.find("interior_voxels") {
             Some(at) => Error::at_line(path, line_of(&text, at), msg),
             None => Error::format(path, msg),

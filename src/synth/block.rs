@@ -119,6 +119,10 @@ pub fn synthesize_block(
         .rolled_to_smoothest_wrap())
 }
 
+/// The largest block side, in voxels: 256^3 voxels take about 200 MB of
+/// synthesis state (optimize: 0.9 GB).
+pub const MAX_BLOCK: usize = 256;
+
 /// Check the options and exemplars; the number of pyramid levels.
 fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
     if exemplars.len() != 1 && exemplars.len() != 3 {
@@ -137,10 +141,9 @@ fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
     let k = opts.neighbourhood;
     check_search(k, 11, opts.iterations, opts.occurrence)?;
     let n = opts.size;
-    // 256^3 voxels take about 200 MB of synthesis state (optimize: 0.9 GB).
-    if !(k..=256).contains(&n) {
+    if !(k..=MAX_BLOCK).contains(&n) {
         return Err(Error::invalid(format!(
-            "the block size must be from {k} (the neighbourhood) to 256 voxels, not {n}"
+            "the block size must be from {k} (the neighbourhood) to {MAX_BLOCK} voxels, not {n}"
         )));
     }
     let levels = match opts.levels {

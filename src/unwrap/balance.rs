@@ -25,6 +25,7 @@ use std::cmp::Ordering;
 use glam::{DMat2, DVec2, DVec3};
 
 use super::conformal::Dirichlet;
+use super::metrics::{double_area, face_double_area};
 use crate::mesh::TriMesh;
 use crate::mesh::curvature::corner_angles;
 
@@ -48,11 +49,7 @@ pub fn balance(
     // The scale at which uv area equals surface area, so that L_t's
     // "unit scale" is the surface's own.
     let (area_3d, area_uv) = faces.iter().zip(&local).fold((0.0, 0.0), |(s, u), (t, p)| {
-        let q = t.map(|v| uv[v as usize]);
-        (
-            s + (p[1] - p[0]).perp_dot(p[2] - p[0]) / 2.0,
-            u + (q[1] - q[0]).perp_dot(q[2] - q[0]) / 2.0,
-        )
+        (s + double_area(*p) / 2.0, u + face_double_area(t, uv) / 2.0)
     });
     if !(area_uv > 0.0 && area_3d > 0.0) {
         return None;
@@ -74,10 +71,7 @@ pub fn balance(
     let bad = |uv: &[DVec2]| {
         faces
             .iter()
-            .filter(|t| {
-                let q = t.map(|v| uv[v as usize]);
-                (q[1] - q[0]).perp_dot(q[2] - q[0]).partial_cmp(&0.0) != Some(Ordering::Greater)
-            })
+            .filter(|t| face_double_area(t, uv).partial_cmp(&0.0) != Some(Ordering::Greater))
             .count()
     };
     // A layout that came with a few flipped slivers may keep them (rounds
@@ -236,8 +230,7 @@ mod tests {
         let spread = |uv: &[DVec2]| {
             let logs: Vec<f64> = (0..chart.num_faces())
                 .map(|f| {
-                    let q = chart.triangles[f].map(|v| uv[v as usize]);
-                    ((q[1] - q[0]).perp_dot(q[2] - q[0]) / 2.0 / chart.face_area(f)).ln()
+                    (face_double_area(&chart.triangles[f], uv) / 2.0 / chart.face_area(f)).ln()
                 })
                 .collect();
             let max = logs.iter().cloned().fold(f64::MIN, f64::max);

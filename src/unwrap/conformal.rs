@@ -14,6 +14,7 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 
+use super::metrics::double_area;
 use crate::error::{Error, Result};
 use crate::linalg::{Cholesky, SpdPattern};
 use crate::mesh::curvature::{angle_defects, corner_angles};
@@ -151,11 +152,33 @@ impl Dirichlet {
 
 /// Log scale factor u of every vertex of a disk chart (0 on the boundary).
 pub fn log_scale(chart: &TriMesh, topo: &Topology) -> Result<Vec<f64>> {
-    let angles = corner_angles(chart);
-    let defect = angle_defects(chart, topo, &angles);
-    let source: Vec<f64> = defect.iter().map(|d| -d).collect();
-    let zero = vec![0.0; chart.num_vertices()];
-    Ok(Dirichlet::on_boundary(chart, topo, &angles, false)?.solve(&zero, &source))
+    Ok(LogScale::solve(chart, topo)?.u)
+}
+
+/// The log scale factor and what it was solved from.
+struct LogScale {
+    angles: Vec<[f64; 3]>,
+    defect: Vec<f64>,
+    /// The cotangent Laplacian with the boundary fixed.
+    dirichlet: Dirichlet,
+    u: Vec<f64>,
+}
+
+impl LogScale {
+    /// L u = -(angle defect) inside, u = 0 on the boundary.
+    fn solve(chart: &TriMesh, topo: &Topology) -> Result<LogScale> {
+        let angles = corner_angles(chart);
+        let defect = angle_defects(chart, topo, &angles);
+        let dirichlet = Dirichlet::on_boundary(chart, topo, &angles, false)?;
+        let source: Vec<f64> = defect.iter().map(|d| -d).collect();
+        let u = dirichlet.solve(&vec![0.0; chart.num_vertices()], &source);
+        Ok(LogScale {
+            angles,
+            defect,
+            dirichlet,
+            u,
+        })
+    }
 }
 
 /// Per face, the log area ratio e^(2u) implies (u averaged over the
@@ -181,12 +204,12 @@ pub fn face_log_area_ratios(chart: &TriMesh, u: &[f64]) -> Vec<f64> {
 /// possible so it closes; the interior follows by harmonic extension
 /// (nonnegative weights). Used when ABF++ cannot flatten a chart.
 pub fn boundary_first(chart: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>> {
-    let angles = corner_angles(chart);
-    let defect = angle_defects(chart, topo, &angles);
-    let dirichlet = Dirichlet::on_boundary(chart, topo, &angles, false)?;
-    let zero = vec![0.0; chart.num_vertices()];
-    let source: Vec<f64> = defect.iter().map(|d| -d).collect();
-    let u = dirichlet.solve(&zero, &source);
+    let LogScale {
+        angles,
+        defect,
+        dirichlet,
+        u,
+    } = LogScale::solve(chart, topo)?;
     let flux = dirichlet.apply(&u);
 
     let cycle: Vec<usize> = match topo.boundary_loops() {
@@ -248,6 +271,7 @@ pub fn boundary_first(chart: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>> {
     // The interior by harmonic extension, with Tutte's positive weights so
     // that slivers of a scan do not fold.
     let extension = Dirichlet::on_boundary(chart, topo, &angles, true)?;
+    let zero = vec![0.0; chart.num_vertices()];
     let x = extension.solve(&boundary_x, &zero);
     let y = extension.solve(&boundary_y, &zero);
     // The curve turns left; if the loop runs clockwise around the chart
@@ -257,7 +281,7 @@ pub fn boundary_first(chart: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>> {
         .iter()
         .map(|t| {
             let q = t.map(|v| DVec2::new(x[v as usize], y[v as usize]));
-            (q[1] - q[0]).perp_dot(q[2] - q[0])
+            double_area(q)
         })
         .sum();
     let flip = if signed < 0.0 { -1.0 } else { 1.0 };
@@ -270,6 +294,7 @@ pub fn boundary_first(chart: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::unwrap::metrics::face_double_area;
 
     #[test]
     fn boundary_first_lays_out_the_estimated_map_without_flips() {
@@ -284,10 +309,7 @@ mod tests {
         let uv_area: Vec<f64> = chart
             .triangles
             .iter()
-            .map(|t| {
-                let q = t.map(|v| uv[v as usize]);
-                (q[1] - q[0]).perp_dot(q[2] - q[0]) / 2.0
-            })
+            .map(|t| face_double_area(t, &uv) / 2.0)
             .collect();
         let k = areas.iter().sum::<f64>() / uv_area.iter().sum::<f64>();
         for f in 0..chart.num_faces() {

@@ -85,26 +85,21 @@ pub fn connect_pieces(topo: &Topology, seams: Vec<EdgeId>, cost: &[f64]) -> Vec<
     for e in &seams {
         is_seam[e.idx()] = true;
     }
-    let faces = |e: EdgeId| {
-        let h = topo.edge_halfedge(e);
-        topo.twin(h)
-            .map(|t| (topo.face(h).idx(), topo.face(t).idx()))
-    };
     let mut sets = DisjointSets::new(topo.num_faces());
     for e in (0..topo.num_edges()).map(EdgeId::from) {
         if !is_seam[e.idx()]
-            && let Some((a, b)) = faces(e)
+            && let Some([a, b]) = topo.edge_faces(e)
         {
-            sets.union(a, b);
+            sets.union(a.idx(), b.idx());
         }
     }
     let mut by_cost = seams.clone();
     by_cost.sort_by(|x, y| cost[y.idx()].total_cmp(&cost[x.idx()]).then(x.cmp(y)));
     for e in by_cost {
-        if let Some((a, b)) = faces(e)
-            && sets.find(a) != sets.find(b)
+        if let Some([a, b]) = topo.edge_faces(e)
+            && sets.find(a.idx()) != sets.find(b.idx())
         {
-            sets.union(a, b);
+            sets.union(a.idx(), b.idx());
             is_seam[e.idx()] = false;
         }
     }
@@ -117,6 +112,17 @@ pub fn connect_pieces(topo: &Topology, seams: Vec<EdgeId>, cost: &[f64]) -> Vec<
 pub struct Cut {
     pub triangles: Vec<[u32; 3]>,
     pub origin: Vec<u32>,
+}
+
+impl Cut {
+    /// The cut surface as a mesh of its own, its vertices at the uncut
+    /// mesh's `positions`.
+    pub fn mesh(&self, positions: &[glam::DVec3]) -> TriMesh {
+        TriMesh::new(
+            self.origin.iter().map(|&v| positions[v as usize]).collect(),
+            self.triangles.clone(),
+        )
+    }
 }
 
 /// Cut `mesh` open along `seams`: each vertex splits into one copy per
@@ -139,9 +145,7 @@ pub fn cut(mesh: &TriMesh, seams: &[EdgeId]) -> Cut {
 /// Fail unless every connected piece of the cut mesh is a topological disk:
 /// one boundary loop and Euler characteristic 1.
 pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
-    let cut_positions = cut.origin.iter().map(|&v| positions[v as usize]).collect();
-    let cut_mesh = TriMesh::new(cut_positions, cut.triangles.clone());
-    let topo = Topology::build(&cut_mesh)?;
+    let topo = Topology::build(&cut.mesh(positions))?;
     let comps = Components::find(&topo);
     for (i, c) in comps.topology(&topo).iter().enumerate() {
         if c.euler != 1 || c.boundary_loops != 1 {
@@ -167,14 +171,7 @@ pub(crate) fn cut_open_sphere(subdivisions: usize) -> TriMesh {
         .max_by(|&a, &b| paths.distance[a].total_cmp(&paths.distance[b]))
         .unwrap();
     let seams = paths.path_to_source(&graph, VertexId::from(far));
-    let cut = cut(&sphere, &seams);
-    TriMesh::new(
-        cut.origin
-            .iter()
-            .map(|&v| sphere.positions[v as usize])
-            .collect(),
-        cut.triangles,
-    )
+    cut(&sphere, &seams).mesh(&sphere.positions)
 }
 
 #[cfg(test)]
@@ -201,16 +198,8 @@ mod tests {
             .collect();
         assert_eq!(link.len(), ring.len(), "the link is a cycle");
         let cut_before = cut(&sphere, &link);
-        let pieces = |c: &Cut| {
-            let m = TriMesh::new(
-                c.origin
-                    .iter()
-                    .map(|&v| sphere.positions[v as usize])
-                    .collect(),
-                c.triangles.clone(),
-            );
-            Components::find(&Topology::build(&m).unwrap()).count
-        };
+        let pieces =
+            |c: &Cut| Components::find(&Topology::build(&c.mesh(&sphere.positions)).unwrap()).count;
         assert_eq!(pieces(&cut_before), 2);
         let mut cost = vec![1.0; topo.num_edges()];
         cost[link[2].idx()] = 5.0;

@@ -67,10 +67,7 @@ pub fn flipped(chart: &TriMesh, uv: &[DVec2]) -> usize {
     chart
         .triangles
         .iter()
-        .filter(|t| {
-            let [a, b, c] = t.map(|v| uv[v as usize]);
-            (b - a).perp_dot(c - a) <= 0.0
-        })
+        .filter(|t| metrics::face_double_area(t, uv) <= 0.0)
         .count()
 }
 
@@ -97,10 +94,7 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         let area_uv: f64 = chart
             .triangles
             .iter()
-            .map(|t| {
-                let q = t.map(|v| uv[v as usize]);
-                (q[1] - q[0]).perp_dot(q[2] - q[0]).abs()
-            })
+            .map(|t| metrics::face_double_area(t, &uv).abs())
             .sum();
         let scale = area_uv / area_3d.iter().sum::<f64>().max(1e-300);
         let least: Vec<f64> = area_3d.iter().map(|a| 1e-3 * a * scale).collect();

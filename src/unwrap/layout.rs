@@ -95,7 +95,7 @@ fn conformality_rows(mesh: &TriMesh, f: usize, a: [f64; 3]) -> [[f64; 6]; 2] {
         DVec2::new(scale, 0.0),
         DVec2::new(a[0].cos(), a[0].sin()) * scale * a[1].sin() / a[2].sin().max(1e-12),
     ];
-    let double_area = (q[1] - q[0]).perp_dot(q[2] - q[0]).abs().max(1e-300);
+    let double_area = super::metrics::double_area(q).abs().max(1e-300);
     let norm = 1.0 / double_area.sqrt();
     let mut re = [0.0; 6];
     let mut im = [0.0; 6];

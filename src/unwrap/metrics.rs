@@ -69,6 +69,18 @@ pub fn split_edges(
         .collect()
 }
 
+/// Signed double area of a uv triangle (positive counter-clockwise).
+#[inline]
+pub fn double_area(q: [DVec2; 3]) -> f64 {
+    (q[1] - q[0]).perp_dot(q[2] - q[0])
+}
+
+/// Signed double area of triangle `t` in the layout `uv`.
+#[inline]
+pub fn face_double_area(t: &[u32; 3], uv: &[DVec2]) -> f64 {
+    double_area(t.map(|v| uv[v as usize]))
+}
+
 /// Singular values (largest first) of the map from a 3D triangle to its uv
 /// triangle, and the uv triangle's signed area.
 pub fn jacobian(p: [DVec3; 3], u: [DVec2; 3]) -> (f64, f64, f64) {
@@ -149,11 +161,10 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
     }
     let mut sets = DisjointSets::new(nf);
     for (e, &seam) in is_seam.iter().enumerate() {
-        let h = topo.edge_halfedge(EdgeId::from(e));
-        if let Some(t) = topo.twin(h)
+        if let Some([f, g]) = topo.edge_faces(EdgeId::from(e))
             && !seam
         {
-            sets.union(topo.face(h).idx(), topo.face(t).idx());
+            sets.union(f.idx(), g.idx());
         }
     }
     let (chart_of, charts) = sets.labels();

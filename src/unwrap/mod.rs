@@ -247,15 +247,7 @@ fn unwrap_piece(
 
     let t1 = Instant::now();
     progress.stage("flatten", 1);
-    let cut_surface = TriMesh::new(
-        seams
-            .cut
-            .origin
-            .iter()
-            .map(|&v| piece.positions[v as usize])
-            .collect(),
-        seams.cut.triangles.clone(),
-    );
+    let cut_surface = seams.cut.mesh(&piece.positions);
     let charts = overlap::flatten_charts(&cut_surface, &opts.abf, opts.split_overlaps)?;
     // Each chart at mesh scale, side by side: one uv layer for the piece.
     let normalised: Vec<Vec<DVec2>> = charts
@@ -322,10 +314,7 @@ fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
     let uv_area: f64 = chart
         .triangles
         .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| uv[v as usize]);
-            ((b - a).perp_dot(c - a) / 2.0).abs()
-        })
+        .map(|t| (metrics::face_double_area(t, &uv) / 2.0).abs())
         .sum();
     let scale = (chart.area() / uv_area.max(1e-300)).sqrt();
     let lo = uv

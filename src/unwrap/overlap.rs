@@ -217,13 +217,12 @@ fn one_pair_per_patch_pair(topo: &Topology, pairs: &[[u32; 2]]) -> Vec<[u32; 2]>
         involved[f as usize] = true;
     }
     let mut patches = DisjointSets::new(topo.num_faces());
-    for e in 0..topo.num_edges() {
-        let h = topo.edge_halfedge(EdgeId::from(e));
-        if let Some(t) = topo.twin(h) {
-            let (f, g) = (topo.face(h).idx(), topo.face(t).idx());
-            if involved[f] && involved[g] {
-                patches.union(f, g);
-            }
+    for e in (0..topo.num_edges()).map(EdgeId::from) {
+        if let Some([f, g]) = topo.edge_faces(e)
+            && involved[f.idx()]
+            && involved[g.idx()]
+        {
+            patches.union(f.idx(), g.idx());
         }
     }
     let mut seen = HashSet::new();

@@ -366,13 +366,7 @@ fn grow(
 /// flattening (`conformal`), per vertex of the uncut surface (0 on the cut),
 /// and the area_log figure it implies.
 fn estimate_stretch(mesh: &TriMesh, cut: &Cut) -> Result<(Vec<f64>, f64)> {
-    let chart = TriMesh::new(
-        cut.origin
-            .iter()
-            .map(|&v| mesh.positions[v as usize])
-            .collect(),
-        cut.triangles.clone(),
-    );
+    let chart = cut.mesh(&mesh.positions);
     let chart_topo = Topology::build(&chart)?;
     let u = conformal::log_scale(&chart, &chart_topo)?;
     let mut area_log = 0.0;

@@ -14,10 +14,7 @@
 
 use glam::DVec2;
 
-/// Signed double area of a uv triangle.
-fn double_area(q: [DVec2; 3]) -> f64 {
-    (q[1] - q[0]).perp_dot(q[2] - q[0])
-}
+use super::metrics::double_area;
 
 /// Move vertices of `uv` until no triangle of `triangles` is flipped or
 /// thinner than `least[f]` (a double area), or `passes` passes over the

@@ -64,9 +64,10 @@ pub enum Colours<'a> {
 const ALONG: [f64; 5] = [0.2, 0.35, 0.5, 0.65, 0.8];
 
 /// The contrast figures of `node`. Every interior edge of the node is
-/// sampled on both sides at five points along it, each a tenth of the way
-/// in towards the face's third corner (in the atlas of the facet owning
-/// that face, or from the layers); the edge is a border (owners differ), a
+/// sampled on both sides at five points along it, each a tenth of the
+/// node's median edge length in from the edge, towards the face's third
+/// corner (in the atlas of the facet owning that face, or from the
+/// layers); the edge is a border (owners differ), a
 /// seam (its ends' uvs differ between the two faces) or ordinary. The
 /// reference for seams and borders is the ordinary edges of the faces along
 /// them: the same textures, layers and sampling scale, so only the seam or
@@ -93,15 +94,34 @@ pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
         let c = layer.triangles[f][i];
         (c, layer.coords[c as usize])
     };
+    // Every edge's sides are compared at the same distance from it.
+    // Insets proportional to each face's height compared points farther
+    // apart across a facet border (the faces along it are tall) than
+    // across the ordinary edges of those faces: the default scene's atlas
+    // border figure sat near 1.12 and swung from 1.02 to 1.22 with the
+    // tissues' offsets alone, for a blend with no step (at one distance:
+    // near 1.03, from 0.90 to 1.11).
+    let mut lengths: Vec<f64> = (0..topo.num_edges())
+        .map(|e| {
+            let [a, b] = topo.edge_vertices(EdgeId::from(e));
+            (node.mesh.positions[a.idx()] - node.mesh.positions[b.idx()]).length()
+        })
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let inset = 0.1 * lengths.get(lengths.len() / 2).copied().unwrap_or(0.0);
     // The colour (sRGB, 0-255) on `h`'s side of its edge, `t` of the way
-    // along it from h's origin, a tenth of the way in towards the third
-    // corner.
+    // along it from h's origin, `inset` in towards the third corner (at
+    // most half way).
     let side = |h: HalfedgeId, t: f64| {
         let face = topo.face(h).idx();
         let i = h.idx() % 3;
-        let mut w = [0.1; 3];
-        w[i] = 0.9 * (1.0 - t);
-        w[(i + 1) % 3] = 0.9 * t;
+        let p = node.mesh.corners(face);
+        let edge = (p[(i + 1) % 3] - p[i]).length();
+        let height = 2.0 * node.mesh.face_area(face) / edge.max(1e-300);
+        let third = (inset / height.max(1e-300)).min(0.5);
+        let mut w = [third; 3];
+        w[i] = (1.0 - third) * (1.0 - t);
+        w[(i + 1) % 3] = (1.0 - third) * t;
         match colours {
             Colours::Atlases(atlases) => {
                 let tri = node.mesh.triangles[face];

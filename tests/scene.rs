@@ -339,7 +339,8 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
     let baked = bake(&default_scene(), out.path(), &opts, &Silent).unwrap();
     for f in &baked.report.facets {
         assert_eq!(
-            f.facet.metrics.overlaps, 0,
+            f.facet.atlas_overlaps,
+            Some(0),
             "{} overlaps in its atlas",
             f.facet.facet
         );

@@ -24,6 +24,7 @@ use crate::mesh::{Facets, Topology, TriMesh, io};
 use crate::progress::{CancelOnly, Progress, check};
 use crate::unwrap::flatten::Method;
 use crate::unwrap::metrics::UvMetrics;
+use crate::unwrap::overlap::overlapping_pairs;
 use crate::unwrap::visibility::{self, Viewpoints};
 use crate::unwrap::{UnwrapOptions, unwrap_seen};
 
@@ -70,7 +71,13 @@ pub struct FacetReport {
     pub seam_edges: usize,
     pub seam_length: f64,
     pub flattening: Vec<Method>,
+    /// Uv distortion figures over the whole piece, ring included.
     pub metrics: UvMetrics,
+    /// For atlases: the facet's own faces whose uvs overlap another own
+    /// face's (the ring's may overlap: it is drawn, through its uvs, into
+    /// the earlier facet's atlas). Must be 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas_overlaps: Option<usize>,
     pub unwrap_s: f64,
 }
 
@@ -251,6 +258,7 @@ fn build_node(
             let piece_seen = seen.restrict(&topology, &piece.vertex_origin, &piece_topo);
             let opts = UnwrapOptions {
                 split_overlaps: for_atlases,
+                atlas_faces: Some(piece.own),
                 ..UnwrapOptions::default()
             };
             let unwrapped = unwrap_seen(&piece.mesh, piece_topo, piece_seen, &opts, &quiet)?;
@@ -258,6 +266,17 @@ fn build_node(
             piece.mesh = unwrapped.mesh;
             let band = seam_bands(&piece.mesh, &unwrapped.topology, spec.bake.seam_band);
             let m = unwrapped.report.metrics.clone();
+            let atlas_overlaps = for_atlases.then(|| {
+                let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
+                let mut faces: Vec<u32> =
+                    overlapping_pairs(&layer.triangles[..piece.own], &layer.coords)
+                        .into_iter()
+                        .flatten()
+                        .collect();
+                faces.sort_unstable();
+                faces.dedup();
+                faces.len()
+            });
             progress.advance(1);
             Ok(BakedFacet {
                 report: FacetReport {
@@ -277,6 +296,7 @@ fn build_node(
                         .flat_map(|p| p.flattening.clone())
                         .collect(),
                     metrics: m,
+                    atlas_overlaps,
                     unwrap_s: start.elapsed().as_secs_f64(),
                 },
                 settings: facet_settings,

@@ -47,6 +47,11 @@ pub struct UnwrapOptions {
     /// (`overlap`): needed by atlases, not by tiled textures, and costs
     /// seams, so off by default.
     pub split_overlaps: bool,
+    /// Only the mesh's first this many faces are drawn into an atlas (a
+    /// facet piece's own faces: its ring is drawn, through the ring's uvs,
+    /// into the earlier facet's atlas, where overlapping uvs do no harm),
+    /// so only overlaps among them are split. `None`: every face.
+    pub atlas_faces: Option<usize>,
 }
 
 impl Default for UnwrapOptions {
@@ -56,6 +61,7 @@ impl Default for UnwrapOptions {
             seams: SeamOptions::default(),
             abf: AbfOptions::default(),
             split_overlaps: false,
+            atlas_faces: None,
         }
     }
 }
@@ -248,7 +254,11 @@ fn unwrap_piece(
     let t1 = Instant::now();
     progress.stage("flatten", 1);
     let cut_surface = seams.cut.mesh(&piece.positions);
-    let charts = overlap::flatten_charts(&cut_surface, &opts.abf, opts.split_overlaps)?;
+    let split = opts.split_overlaps.then(|| {
+        let drawn = opts.atlas_faces.unwrap_or(usize::MAX);
+        faces.iter().map(|f| f.idx() < drawn).collect::<Vec<bool>>()
+    });
+    let charts = overlap::flatten_charts(&cut_surface, &opts.abf, split.as_deref())?;
     // Each chart at mesh scale, side by side: one uv layer for the piece.
     let normalised: Vec<Vec<DVec2>> = charts
         .iter()

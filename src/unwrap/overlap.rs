@@ -128,14 +128,26 @@ pub struct FlatChart {
 /// the remaining chart again.
 const MAX_ROUNDS: usize = 4;
 
-/// Flatten the disk `chart`; with `split`, split it where its flattening
-/// overlaps itself. Uvs come back in raw flattening units (callers
-/// normalise).
-pub fn flatten_charts(chart: &TriMesh, abf: &AbfOptions, split: bool) -> Result<Vec<FlatChart>> {
-    flatten_part(chart, abf, if split { MAX_ROUNDS } else { 0 })
+/// Flatten the disk `chart`; with `split` (per face: whether it is drawn
+/// into the atlas), split it where its flattening overlaps itself between
+/// drawn faces. Uvs come back in raw flattening units (callers normalise).
+pub fn flatten_charts(
+    chart: &TriMesh,
+    abf: &AbfOptions,
+    split: Option<&[bool]>,
+) -> Result<Vec<FlatChart>> {
+    match split {
+        Some(drawn) => flatten_part(chart, abf, drawn, MAX_ROUNDS),
+        None => flatten_part(chart, abf, &[], 0),
+    }
 }
 
-fn flatten_part(chart: &TriMesh, abf: &AbfOptions, rounds: usize) -> Result<Vec<FlatChart>> {
+fn flatten_part(
+    chart: &TriMesh,
+    abf: &AbfOptions,
+    drawn: &[bool],
+    rounds: usize,
+) -> Result<Vec<FlatChart>> {
     let topo = Topology::build(chart)?;
     let flat = flatten(chart, &topo, abf)?;
     let whole = || {
@@ -150,7 +162,8 @@ fn flatten_part(chart: &TriMesh, abf: &AbfOptions, rounds: usize) -> Result<Vec<
     if rounds == 0 {
         return Ok(whole());
     }
-    let pairs = overlapping_pairs(&chart.triangles, &flat.uv);
+    let mut pairs = overlapping_pairs(&chart.triangles, &flat.uv);
+    pairs.retain(|&[f, g]| drawn[f as usize] && drawn[g as usize]);
     if pairs.is_empty() {
         return Ok(whole());
     }
@@ -192,7 +205,8 @@ fn flatten_part(chart: &TriMesh, abf: &AbfOptions, rounds: usize) -> Result<Vec<
     let flattened: Vec<Vec<FlatChart>> = parts
         .into_par_iter()
         .map(|(faces, part, origin)| {
-            Ok(flatten_part(&part, abf, rounds - 1)?
+            let drawn: Vec<bool> = faces.iter().map(|f| drawn[f.idx()]).collect();
+            Ok(flatten_part(&part, abf, &drawn, rounds - 1)?
                 .into_iter()
                 .map(|sub| FlatChart {
                     faces: sub.faces.iter().map(|&f| faces[f as usize].0).collect(),

@@ -15,7 +15,7 @@ use super::balance::balance;
 use super::conformal::boundary_first;
 use super::layout;
 use super::metrics;
-use super::untangle::untangle;
+use super::untangle::unfold_layout;
 use crate::error::Result;
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh};
@@ -86,20 +86,8 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
     // A layout that flipped a few slivers is unfolded vertex by vertex;
     // one without flips then has its area evened out.
     let unfold = |mut uv: Vec<DVec2>| {
-        // No triangle thinner than a thousandth of its own area at the
-        // layout's scale.
-        let area_3d: Vec<f64> = (0..chart.num_faces())
-            .map(|f| 2.0 * chart.face_area(f))
-            .collect();
-        let area_uv: f64 = chart
-            .triangles
-            .iter()
-            .map(|t| metrics::face_double_area(t, &uv).abs())
-            .sum();
-        let scale = area_uv / area_3d.iter().sum::<f64>().max(1e-300);
-        let least: Vec<f64> = area_3d.iter().map(|a| 1e-3 * a * scale).collect();
         let before = flipped(chart, &uv);
-        let left = untangle(&chart.triangles, &mut uv, &least, 10);
+        let left = unfold_layout(chart, &mut uv);
         (uv, before.saturating_sub(left), left)
     };
     let balanced = |uv: Vec<DVec2>| {

@@ -14,7 +14,25 @@
 
 use glam::DVec2;
 
-use super::metrics::double_area;
+use super::metrics::{double_area, face_double_area};
+use crate::mesh::TriMesh;
+
+/// Unfold a chart's layout: no triangle flipped or thinner than a
+/// thousandth of its own surface area at the layout's scale. Returns the
+/// triangles still bad (`untangle`, 10 passes).
+pub fn unfold_layout(chart: &TriMesh, uv: &mut [DVec2]) -> usize {
+    let area_3d: Vec<f64> = (0..chart.num_faces())
+        .map(|f| 2.0 * chart.face_area(f))
+        .collect();
+    let area_uv: f64 = chart
+        .triangles
+        .iter()
+        .map(|t| face_double_area(t, uv).abs())
+        .sum();
+    let scale = area_uv / area_3d.iter().sum::<f64>().max(1e-300);
+    let least: Vec<f64> = area_3d.iter().map(|a| 1e-3 * a * scale).collect();
+    untangle(&chart.triangles, uv, &least, 10)
+}
 
 /// Move vertices of `uv` until no triangle of `triangles` is flipped or
 /// thinner than `least[f]` (a double area), or `passes` passes over the

@@ -10,6 +10,7 @@ use organtex::mesh::{Components, Topology, TriMesh};
 use organtex::progress::{Progress, Silent};
 use organtex::scene::bake::{BakeOptions, BakeReport, bake};
 use organtex::scene::uterus::{self, CavityParams};
+use organtex::solid::section::{Plane, plane_section};
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result};
 
@@ -162,6 +163,56 @@ fn the_generated_cavity_is_a_clean_open_surface_facing_inside() {
     assert_ne!(other.positions, mesh.positions);
 }
 
+#[test]
+fn a_wall_thickness_closes_the_cavity_into_a_solid_a_cut_shows() {
+    let p = CavityParams {
+        wall_thickness: 8.0,
+        ..uterus::demo()
+    };
+    let mesh = uterus::generate(&p).unwrap();
+    let topo = Topology::build(&mesh).expect("manifold");
+    let parts = Components::find(&topo).topology(&topo);
+    assert_eq!(parts.len(), 1);
+    assert_eq!((parts[0].genus, parts[0].boundary_loops), (0, 0), "closed");
+    let names = &mesh.facets.as_ref().unwrap().names;
+    assert_eq!(names, &["wall", "myoma-1", "myoma-2", "polyp-1", "serosa"]);
+    // Faces face out of the solid, and the solid is the wall: the volume
+    // inside the serosa minus the cavity's.
+    let cavity = uterus::generate(&uterus::demo()).unwrap();
+    assert!(
+        mesh.signed_volume() > 1000.0 && mesh.signed_volume() > -2.0 * cavity.signed_volume(),
+        "wall {} against cavity {}",
+        mesh.signed_volume(),
+        cavity.signed_volume()
+    );
+    assert_eq!(self_intersections(&mesh), 0);
+    // A cut across the long axis, half way up: a ring of wall round the
+    // cavity, its hole the cavity's section.
+    let plane = Plane::new(DVec3::Z, 20.0).unwrap();
+    let cut = plane_section(&mesh, &topo, plane).unwrap();
+    assert_eq!(cut.boundary.len(), 2, "the wall's outline and the cavity");
+    let rel = (cut.area() - cut.polygon_area()).abs() / cut.polygon_area();
+    assert!(rel < 1e-6, "{rel}");
+    let loop_area = |l: &Vec<u32>| {
+        let q: Vec<_> = l.iter().map(|&i| cut.plane_point(i)).collect();
+        (0..q.len())
+            .map(|i| q[i].perp_dot(q[(i + 1) % q.len()]) / 2.0)
+            .sum::<f64>()
+    };
+    let (outline, hole) = (loop_area(&cut.boundary[0]), loop_area(&cut.boundary[1]));
+    assert!(
+        outline > 0.0 && hole < -0.2 * outline,
+        "outline {outline}, hole {hole}"
+    );
+    // A thickness beyond the cavity's size is refused, naming the key.
+    let err = uterus::generate(&CavityParams {
+        wall_thickness: 100.0,
+        ..uterus::demo()
+    })
+    .unwrap_err();
+    assert_eq!(err.key, "wall_thickness");
+}
+
 /// Pairs of faces sharing no vertex that cross each other, found through a
 /// grid of cells a few triangles wide.
 fn self_intersections(mesh: &TriMesh) -> usize {
@@ -265,7 +316,10 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
         );
     }
     let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();
-    assert_eq!(facets, ["wall", "myoma-front", "myoma-back", "polyp"]);
+    assert_eq!(
+        facets,
+        ["wall", "myoma-front", "myoma-back", "polyp", "serosa"]
+    );
     for f in &r.facets {
         assert_eq!(f.facet.metrics.flips, 0, "{}", f.facet.facet);
         assert!(f.facet.metrics.conf_mean < 1.1, "{}", f.facet.facet);
@@ -293,7 +347,8 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
             "uterus/wall",
             "uterus/myoma-front",
             "uterus/myoma-back",
-            "uterus/polyp"
+            "uterus/polyp",
+            "uterus/serosa"
         ]
     );
     let materials = json["materials"].as_array().unwrap();
@@ -357,7 +412,7 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
     );
     assert_eq!(
         json["images"].as_array().unwrap().len(),
-        4,
+        5,
         "one atlas per facet"
     );
 }

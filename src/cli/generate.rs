@@ -32,6 +32,11 @@ pub struct Args {
     /// Resolution: larger gives more triangles (1 to 8).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=8))]
     resolution: u32,
+    /// Uterus: the wall's thickness. With it the mesh is the uterine wall as
+    /// a closed solid (cavity inside, facet "serosa" outside), which
+    /// `organtex section` can cut; without it, the open cavity alone.
+    #[arg(long, default_value_t = 0.0)]
+    wall_thickness: f64,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -41,8 +46,20 @@ pub fn run(args: Args) -> Result<()> {
         Shape::DoubleTorus => shapes::holed_slab(2, r + 1, 4),
         Shape::Cylinder => shapes::open_cylinder(0.5, 1.5, 12 * r, 4 * r),
         Shape::Sphere => shapes::icosphere(r),
-        Shape::Uterus => organtex::scene::uterus::generate(&organtex::scene::uterus::demo())
-            .map_err(|e| Error::invalid(format!("{}: {}", e.key, e.msg)))?,
+        Shape::Uterus => {
+            let params = organtex::scene::uterus::CavityParams {
+                wall_thickness: args.wall_thickness,
+                ..organtex::scene::uterus::demo()
+            };
+            organtex::scene::uterus::generate(&params).map_err(|e| {
+                let key = if e.key == "wall_thickness" {
+                    "--wall-thickness".into()
+                } else {
+                    e.key
+                };
+                Error::invalid(format!("{key}: {}", e.msg))
+            })?
+        }
     };
     if args.output.extension().and_then(|e| e.to_str()) != Some("obj") {
         return Err(Error::format(

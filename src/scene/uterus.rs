@@ -61,6 +61,13 @@ pub struct CavityParams {
     /// Icosphere subdivisions (4: 5k faces, 5: 20k, 6: 80k).
     #[serde(default = "default_resolution")]
     pub resolution: usize,
+    /// The uterine wall's thickness: with it, the mesh is the wall as a
+    /// closed solid, the cavity inside and the serosa (facet "serosa")
+    /// outside, joined round the cervical canal, so that a cut through it
+    /// shows the wall (`solid::section`); 0 (the default): the cavity
+    /// surface alone, open at the canal.
+    #[serde(default)]
+    pub wall_thickness: f64,
     #[serde(default, rename = "myoma")]
     pub myomas: Vec<Myoma>,
     #[serde(default, rename = "polyp")]
@@ -100,6 +107,7 @@ pub fn demo() -> CavityParams {
         depth: default_depth(),
         cervix_radius: default_cervix(),
         resolution: default_resolution(),
+        wall_thickness: 0.0,
         myomas: vec![
             Myoma {
                 name: None,
@@ -353,6 +361,20 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
             kept_facets.push(*f);
         }
     }
+    if p.wall_thickness > 0.0 {
+        let serosa = names.len() as u32;
+        names.push("serosa".into());
+        close_wall(
+            p,
+            &sphere,
+            &heights,
+            t_open,
+            &mut positions,
+            &mut kept,
+            &mut kept_facets,
+            serosa,
+        )?;
+    }
     let mut mesh = compact(positions, kept);
     mesh.facets = Some(Facets {
         names,
@@ -360,6 +382,67 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
     });
     debug_assert!(Topology::build(&mesh).is_ok());
     Ok(mesh)
+}
+
+/// Close the cavity into the uterine wall: the serosa is the pear (without
+/// the myomas and polyps, which grow into the cavity) pushed out along its
+/// normal by the wall's thickness, opened at the same height as the cavity,
+/// and the two rims round the canal are joined face to face. Every point of
+/// the serosa lies the thickness away from the pear, outwards, and every
+/// feature grows inwards, so the two surfaces never meet. Faces face out of
+/// the solid: into the cavity inside, away from it outside.
+#[allow(clippy::too_many_arguments)]
+fn close_wall(
+    p: &CavityParams,
+    sphere: &TriMesh,
+    heights: &[f64],
+    t_open: f64,
+    positions: &mut Vec<DVec3>,
+    triangles: &mut Vec<[u32; 3]>,
+    facets: &mut Vec<u32>,
+    serosa: u32,
+) -> Result<(), ParamError> {
+    let cavity_faces = triangles.len();
+    let base = positions.len() as u32;
+    positions.extend(
+        sphere
+            .positions
+            .iter()
+            .map(|&q| pear(p, q) + outward_normal(p, q) * p.wall_thickness),
+    );
+    for t in &sphere.triangles {
+        if t.iter().any(|&v| heights[v as usize] >= t_open) {
+            triangles.push(t.map(|v| v + base));
+            facets.push(serosa);
+        }
+    }
+    // The cavity's rim: its edges that no other cavity face runs the other
+    // way. Each becomes a quad to the same edge of the serosa's rim, which
+    // runs it the other way round (the serosa is not reversed).
+    let mut directed = std::collections::HashSet::new();
+    for t in &triangles[..cavity_faces] {
+        for i in 0..3 {
+            directed.insert((t[i], t[(i + 1) % 3]));
+        }
+    }
+    let mut rim: Vec<(u32, u32)> = directed
+        .iter()
+        .filter(|&&(a, b)| !directed.contains(&(b, a)))
+        .copied()
+        .collect();
+    rim.sort_unstable();
+    if rim.iter().any(|&(a, b)| a.max(b) >= base) {
+        return Err(bad(
+            "wall_thickness",
+            "a myoma or polyp reaches the cervical canal, so the wall cannot be closed there",
+        ));
+    }
+    for (a, b) in rim {
+        triangles.push([b, a, a + base]);
+        triangles.push([b, a + base, b + base]);
+        facets.extend([serosa, serosa]);
+    }
+    Ok(())
 }
 
 fn fmt(x: f64) -> String {
@@ -384,6 +467,16 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
                 "{} must be less than a quarter of the cavity's width and depth ({})",
                 fmt(p.cervix_radius),
                 fmt(p.width.min(p.depth) / 4.0)
+            ),
+        ));
+    }
+    if !(p.wall_thickness.is_finite() && (0.0..=p.width.min(p.depth)).contains(&p.wall_thickness)) {
+        return Err(bad(
+            "wall_thickness",
+            format!(
+                "must be from 0 to the cavity's depth and width ({}), not {}",
+                fmt(p.width.min(p.depth)),
+                p.wall_thickness
             ),
         ));
     }

@@ -16,9 +16,10 @@ pub struct Args {
     /// succeeds).
     #[arg(short, long, value_name = "DIR")]
     output: PathBuf,
-    /// Bake each facet into one SIZE x SIZE texture with the seam blend,
-    /// facet blend and overlay composited in, for engines that draw no alpha
-    /// layers. Without it, the .glb holds tiled tissue textures with
+    /// Bake each facet into one texture with the seam blend, facet blend
+    /// and overlay composited in, for engines that draw no alpha layers: one
+    /// texel density across the scene, the widest facet's longer side SIZE
+    /// texels, each atlas as wide and tall as its charts. Without it, the .glb holds tiled tissue textures with
     /// KHR_texture_transform and blended layers with vertex alpha.
     #[arg(long, value_name = "SIZE", value_parser = clap::value_parser!(u32).range(64..=16384))]
     atlas: Option<u32>,
@@ -85,6 +86,20 @@ fn print(baked: &Baked) {
     println!(
         "  contrast: colour jump across seams/borders over that across ordinary edges (1 = invisible)"
     );
+    let atlases: Vec<String> = r
+        .facets
+        .iter()
+        .filter_map(|f| {
+            let ([w, h], used) = (f.atlas?, f.atlas_texel_use?);
+            Some(format!("{} {w}x{h} {:.0}%", f.facet.facet, 100.0 * used))
+        })
+        .collect();
+    if !atlases.is_empty() {
+        println!(
+            "  atlases (texels the facet covers): {}",
+            atlases.join(", ")
+        );
+    }
     if let Some(density) = r.atlas_density
         && density < r.texture_density / 2.0
     {

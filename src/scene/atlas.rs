@@ -14,29 +14,40 @@ use crate::raster;
 /// A facet's baked texture and where its chart sits in it.
 #[derive(Clone, Debug)]
 pub struct Atlas {
-    pub size: usize,
+    pub width: usize,
+    pub height: usize,
     /// sRGB, row by row from the top.
     pub pixels: Vec<[u8; 3]>,
+    /// The share of texels the facet's own faces cover.
+    pub texel_use: f64,
     lo: DVec2,
-    scale: f64,
-    margin: f64,
+    /// Texels per uv (mesh) unit.
+    density: f64,
 }
 
+/// Texels of margin round the charts, for filtering across their edges.
+const MARGIN: f64 = 4.0;
+
 impl Atlas {
+    /// Texel coordinates (0..width, 0..height, v down) of chart uv `uv`.
+    fn texel(&self, uv: DVec2) -> DVec2 {
+        (uv - self.lo) * self.density + DVec2::splat(MARGIN)
+    }
+
     /// Texture coordinates (0..1, v down) of chart uv `uv`.
     pub fn texcoord(&self, uv: DVec2) -> DVec2 {
-        (uv - self.lo) * self.scale + DVec2::splat(self.margin)
+        self.texel(uv) / DVec2::new(self.width as f64, self.height as f64)
     }
 
     /// Bilinear sample at chart uv `uv`, in sRGB 0-255.
     pub fn sample(&self, uv: DVec2) -> [f64; 3] {
-        let t = self.texcoord(uv) * self.size as f64 - DVec2::splat(0.5);
+        let t = self.texel(uv) - DVec2::splat(0.5);
         let (x0, y0) = (t.x.floor(), t.y.floor());
         let (fx, fy) = (t.x - x0, t.y - y0);
         let at = |x: f64, y: f64| {
-            let xi = (x as i64).clamp(0, self.size as i64 - 1) as usize;
-            let yi = (y as i64).clamp(0, self.size as i64 - 1) as usize;
-            self.pixels[yi * self.size + xi]
+            let xi = (x as i64).clamp(0, self.width as i64 - 1) as usize;
+            let yi = (y as i64).clamp(0, self.height as i64 - 1) as usize;
+            self.pixels[yi * self.width + xi]
         };
         let c = [
             at(x0, y0),
@@ -67,65 +78,45 @@ fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
     )
 }
 
-fn extent(f: &BakedFacet) -> f64 {
+fn extent(f: &BakedFacet) -> DVec2 {
     let (lo, hi) = chart_box(f);
-    (hi - lo).max_element().max(0.0)
+    (hi - lo).max(DVec2::ZERO)
 }
 
 /// The widest facet's chart box side, in mesh units.
 fn widest_chart(nodes: &[BakedNode]) -> f64 {
     nodes
         .iter()
-        .flat_map(|n| n.facets.iter().map(extent))
+        .flat_map(|n| n.facets.iter().map(|f| extent(f).max_element()))
         .fold(0.0, f64::max)
 }
 
-/// Atlas texels per mesh unit when the widest facet gets `largest`.
+/// Atlas texels per mesh unit when the widest facet's longer side gets
+/// `largest` texels, margins included.
 pub fn density(nodes: &[BakedNode], largest: usize) -> f64 {
-    largest as f64 / widest_chart(nodes).max(1e-300)
+    (largest as f64 - 2.0 * MARGIN).max(1.0) / widest_chart(nodes).max(1e-300)
 }
 
-/// Atlas sides, per node per facet, for one texel density across the scene:
-/// the widest facet gets `largest` texels, the others in proportion (at
-/// least 64), so a tissue seen across a facet border is equally sharp on
-/// both sides.
-pub fn sizes(nodes: &[BakedNode], largest: usize) -> Vec<Vec<usize>> {
-    let widest = widest_chart(nodes);
-    nodes
-        .iter()
-        .map(|n| {
-            n.facets
-                .iter()
-                .map(|f| {
-                    let share = if widest > 0.0 {
-                        extent(f) / widest
-                    } else {
-                        1.0
-                    };
-                    ((largest as f64 * share).ceil() as usize).clamp(64.min(largest), largest)
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// Bake `facet`'s atlas, `size` texels square, from `compositor`.
-pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size: usize) -> Atlas {
+/// Bake `facet`'s atlas from `compositor` at `density` texels per mesh
+/// unit (one density across the scene, so a tissue seen across a facet
+/// border is equally sharp on both sides): as wide and as tall as the
+/// facet's charts, plus margins.
+pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, density: f64) -> Atlas {
     let piece = &facet.piece;
     let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
-    let (lo, hi) = chart_box(facet);
-    // Four texels of margin, for filtering across the chart's edge.
-    let margin = 4.0 / size as f64;
-    let scale = (1.0 - 2.0 * margin) / (hi - lo).max_element().max(1e-300);
+    let (lo, _) = chart_box(facet);
+    let side = |e: f64| ((e * density - 1e-6).ceil() as usize + 2 * MARGIN as usize).max(16);
+    let (width, height) = (side(extent(facet).x), side(extent(facet).y));
     let mut atlas = Atlas {
-        size,
-        pixels: vec![[0, 0, 0]; size * size],
+        width,
+        height,
+        pixels: vec![[0, 0, 0]; width * height],
+        texel_use: 0.0,
         lo,
-        scale,
-        margin,
+        density,
     };
     let texel_uv: Vec<[DVec2; 3]> = (0..piece.own)
-        .map(|f| layer.triangles[f].map(|c| atlas.texcoord(layer.coords[c as usize]) * size as f64))
+        .map(|f| layer.triangles[f].map(|c| atlas.texel(layer.coords[c as usize])))
         .collect();
     // Each texel's face: the one holding its centre, else the nearest one
     // within PAD texels (the texel then shows the chart continued past its
@@ -133,28 +124,28 @@ pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size:
     // whatever the order. Coverage is cheap; colours are the cost, so they
     // are computed once per texel, in parallel, below.
     const PAD: f64 = 2.0;
-    let mut best = vec![(f32::INFINITY, u32::MAX); size * size];
+    let mut best = vec![(f32::INFINITY, u32::MAX); width * height];
     for (f, &tri) in texel_uv.iter().enumerate() {
-        raster::triangle_padded(tri, size, size, PAD, |x, y, outside| {
+        raster::triangle_padded(tri, width, height, PAD, |x, y, outside| {
             let candidate = (outside as f32, f as u32);
-            let slot = &mut best[y * size + x];
+            let slot = &mut best[y * width + x];
             if candidate < *slot {
                 *slot = candidate;
             }
         });
     }
     // Mesh units per texel: textures finer than that are averaged down.
-    let footprint = 1.0 / (atlas.scale * size as f64);
+    let footprint = 1.0 / density;
     let node_order: Vec<[usize; 3]> = (0..piece.own)
         .map(|f| piece.corner_order(&node.mesh, f))
         .collect();
     atlas
         .pixels
-        .par_chunks_mut(size)
+        .par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, row)| {
             for (x, pixel) in row.iter_mut().enumerate() {
-                let (_, f) = best[y * size + x];
+                let (_, f) = best[y * width + x];
                 if f == u32::MAX {
                     continue;
                 }
@@ -171,20 +162,24 @@ pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, size:
                 *pixel = c.map(|v| (linear_to_srgb(v) * 255.0).round() as u8);
             }
         });
+    // Texels whose centre a face covers (the padding round the charts
+    // does not count).
+    atlas.texel_use =
+        best.iter().filter(|&&(d, _)| d == 0.0).count() as f64 / (width * height) as f64;
     let mut covered: Vec<bool> = best.iter().map(|&(_, f)| f != u32::MAX).collect();
-    dilate(&mut atlas.pixels, &mut covered, size, 4);
+    dilate(&mut atlas.pixels, &mut covered, [width, height], 4);
     atlas
 }
 
 /// Spread covered texels into uncovered neighbours, `steps` times, so
 /// filtering at chart edges never reads background.
-fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], size: usize, steps: usize) {
+fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], [width, height]: [usize; 2], steps: usize) {
     for _ in 0..steps {
         let before = covered.to_vec();
         let source = pixels.to_vec();
-        for y in 0..size {
-            for x in 0..size {
-                let i = y * size + x;
+        for y in 0..height {
+            for x in 0..width {
+                let i = y * width + x;
                 if before[i] {
                     continue;
                 }
@@ -192,8 +187,8 @@ fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], size: usize, steps: usiz
                 let mut n = 0;
                 for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
                     let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-                    if nx >= 0 && ny >= 0 && (nx as usize) < size && (ny as usize) < size {
-                        let j = ny as usize * size + nx as usize;
+                    if nx >= 0 && ny >= 0 && (nx as usize) < width && (ny as usize) < height {
+                        let j = ny as usize * width + nx as usize;
                         if before[j] {
                             for c in 0..3 {
                                 sum[c] += source[j][c] as u32;

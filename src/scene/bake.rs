@@ -69,6 +69,12 @@ pub struct FacetLine {
     pub seam_contrast: Option<f64>,
     /// The same without seam bands and overlap rings.
     pub seam_contrast_unblended: Option<f64>,
+    /// In atlas mode: its atlas's width and height, and the share of
+    /// their texels the facet covers.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<[usize; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas_texel_use: Option<f64>,
 }
 
 /// The facet-border figures of one node.
@@ -209,12 +215,15 @@ pub fn bake(
 
     let mut facets = Vec::new();
     let mut borders = Vec::new();
-    for (node, (b, u)) in baked.nodes.iter().zip(&figures) {
+    for (n, (node, (b, u))) in baked.nodes.iter().zip(&figures).enumerate() {
         for (k, facet) in node.facets.iter().enumerate() {
+            let atlas = blended.as_ref().map(|(a, _)| &a[n][k]);
             facets.push(FacetLine {
                 facet: facet.report.clone(),
                 seam_contrast: b.seams[k],
                 seam_contrast_unblended: u.seams[k],
+                atlas: atlas.map(|a| [a.width, a.height]),
+                atlas_texel_use: atlas.map(|a| a.texel_use),
             });
         }
         borders.push(BorderLine {
@@ -349,15 +358,15 @@ fn atlases(
     progress.stage("atlases", 2 * count as u64);
     let mut blended = Vec::new();
     let mut unblended = Vec::new();
-    for (node, sizes) in scene.nodes.iter().zip(atlas::sizes(&scene.nodes, size)) {
+    let density = atlas::density(&scene.nodes, size);
+    for node in &scene.nodes {
         let pairs: Vec<(Atlas, Atlas)> = node
             .facets
             .par_iter()
-            .zip(sizes)
-            .map(|(facet, size)| {
-                let b = atlas::bake(node, facet, &node.compositor, size);
+            .map(|facet| {
+                let b = atlas::bake(node, facet, &node.compositor, density);
                 progress.advance(1);
-                let u = atlas::bake(node, facet, &node.unblended, size);
+                let u = atlas::bake(node, facet, &node.unblended, density);
                 progress.advance(1);
                 (b, u)
             })

@@ -520,8 +520,8 @@ impl DrawList {
             .iter()
             .flat_map(|p| [p[0], p[1], p[2], 255])
             .collect();
-        let img =
-            image::RgbaImage::from_raw(atlas.size as u32, atlas.size as u32, raw).expect("sized");
+        let img = image::RgbaImage::from_raw(atlas.width as u32, atlas.height as u32, raw)
+            .expect("sized");
         let m = self.material(Material::baked(name.clone(), format!("atlas:{name}"), img));
         let piece = &facet.piece;
         let layer = piece.mesh.uvs.as_ref().expect("unwrapped");

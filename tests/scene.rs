@@ -400,6 +400,13 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
             f.facet.facet
         );
         assert_eq!(f.facet.metrics.flips, 0);
+        // Each atlas as wide and tall as its charts, at one density: most
+        // of its texels are the facet's (a square atlas round the wall's
+        // chart used 27%).
+        let [w, h] = f.atlas.unwrap();
+        assert!(w.max(h) <= 2048, "{} atlas {w}x{h}", f.facet.facet);
+        let used = f.atlas_texel_use.unwrap();
+        assert!(used >= 0.45, "{} uses {used:.2} of its atlas", f.facet.facet);
     }
     assert_hidden(&baked.report, "atlas");
     let (json, _) = glb_chunks(&baked.glb);

@@ -16,6 +16,7 @@ pub mod flatten;
 pub mod layout;
 pub mod metrics;
 pub mod overlap;
+pub mod pack;
 pub mod seamster;
 pub mod steiner;
 pub mod terminals;
@@ -174,7 +175,12 @@ pub fn unwrap_seen(
         .collect::<Result<_>>()?;
 
     // One uv layer: every piece's cut vertices, charts side by side.
-    let offsets = pack(&pieces.iter().map(|p| extent(&p.uv)).collect::<Vec<_>>());
+    let offsets = pack::shelves(
+        &pieces
+            .iter()
+            .map(|p| pack::extent(&p.uv))
+            .collect::<Vec<_>>(),
+    );
     let mut coords = Vec::new();
     let mut uv_triangles = vec![[0u32; 3]; mesh.num_faces()];
     let mut seams = Vec::new();
@@ -268,10 +274,15 @@ fn unwrap_piece(
                 .iter()
                 .map(|&v| cut_surface.positions[v as usize])
                 .collect();
-            normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
+            pack::normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
         })
         .collect();
-    let offsets = pack(&normalised.iter().map(|uv| extent(uv)).collect::<Vec<_>>());
+    let offsets = pack::shelves(
+        &normalised
+            .iter()
+            .map(|uv| pack::extent(uv))
+            .collect::<Vec<_>>(),
+    );
     let mut uv = Vec::new();
     let mut cut_triangles = vec![[0u32; 3]; faces.len()];
     for ((chart, chart_uv), offset) in charts.iter().zip(&normalised).zip(offsets) {
@@ -311,50 +322,4 @@ fn unwrap_piece(
         seams_s,
         flatten_s,
     })
-}
-
-/// The upper-right corner of uvs that start at the origin.
-fn extent(uv: &[DVec2]) -> DVec2 {
-    uv.iter().fold(DVec2::ZERO, |m, &u| m.max(u))
-}
-
-/// Scale a chart's uvs so its uv area equals its 3D area, and move its
-/// lower-left corner to the origin.
-fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
-    let uv_area: f64 = chart
-        .triangles
-        .iter()
-        .map(|t| (metrics::face_double_area(t, &uv) / 2.0).abs())
-        .sum();
-    let scale = (chart.area() / uv_area.max(1e-300)).sqrt();
-    let lo = uv
-        .iter()
-        .fold(DVec2::splat(f64::INFINITY), |m, &u| m.min(u));
-    uv.into_iter().map(|u| (u - lo) * scale).collect()
-}
-
-/// Place boxes of `sizes` (charts, or pieces of charts) left to right in
-/// rows (shelf packing), tallest first, with a margin: returns each one's
-/// offset.
-fn pack(sizes: &[DVec2]) -> Vec<DVec2> {
-    let total_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
-    let row_width = total_area
-        .sqrt()
-        .max(sizes.iter().map(|s| s.x).fold(0.0, f64::max));
-    let margin = 0.02 * row_width;
-    let mut order: Vec<usize> = (0..sizes.len()).collect();
-    order.sort_by(|&a, &b| sizes[b].y.total_cmp(&sizes[a].y).then(a.cmp(&b)));
-    let mut offsets = vec![DVec2::ZERO; sizes.len()];
-    let (mut x, mut y, mut row_height) = (0.0, 0.0, 0.0f64);
-    for i in order {
-        if x > 0.0 && x + sizes[i].x > row_width {
-            x = 0.0;
-            y += row_height + margin;
-            row_height = 0.0;
-        }
-        offsets[i] = DVec2::new(x, y);
-        x += sizes[i].x + margin;
-        row_height = row_height.max(sizes[i].y);
-    }
-    offsets
 }

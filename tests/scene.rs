@@ -406,7 +406,11 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
         let [w, h] = f.atlas.unwrap();
         assert!(w.max(h) <= 2048, "{} atlas {w}x{h}", f.facet.facet);
         let used = f.atlas_texel_use.unwrap();
-        assert!(used >= 0.45, "{} uses {used:.2} of its atlas", f.facet.facet);
+        assert!(
+            used >= 0.45,
+            "{} uses {used:.2} of its atlas",
+            f.facet.facet
+        );
     }
     assert_hidden(&baked.report, "atlas");
     let (json, _) = glb_chunks(&baked.glb);

@@ -198,6 +198,27 @@ fn the_clinician_flow() {
         "moving the cut plane changes the picture ({changed} pixels)"
     );
     assert!(h.state().cut_triangles() > 0, "the section is drawn");
+    // "facing me" turns the plane towards the camera: the section across
+    // the line of sight is drawn.
+    h.get_by_label("facing me").click();
+    h.run_steps(2);
+    let towards_eye = (h.state().camera.eye() - h.state().camera.target).normalize();
+    assert!(
+        h.state().cut.normal.dot(towards_eye) > 0.999,
+        "{:?}",
+        h.state().cut
+    );
+    assert!(h.state().cut_triangles() > 0, "the facing section is drawn");
+    let facing = h.state().read_scene().unwrap();
+    let changed = moved_cut
+        .pixels()
+        .zip(facing.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 1000,
+        "turning the cut plane changes the picture ({changed} pixels)"
+    );
 
     // Orbit away, then Home brings back the scene's camera.
     let opened = h.state().camera.eye();

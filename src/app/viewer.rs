@@ -48,9 +48,11 @@ pub enum Mode {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CutPlane {
     pub on: bool,
-    /// Across x, y or z.
-    pub axis: usize,
-    /// Where across the scene's bounds, 0..1.
+    /// The plane's unit normal: the half of the scene it points into is
+    /// cut away, and the section faces that way. An axis, or towards the
+    /// camera when set from the view.
+    pub normal: DVec3,
+    /// Where across the scene's bounds along the normal, 0..1.
     pub at: f64,
 }
 
@@ -115,7 +117,7 @@ pub struct Viewer {
     pub mode: Mode,
     pub cut: CutPlane,
     /// The cut plane the section was last made for.
-    cut_made: Option<(usize, f64)>,
+    cut_made: Option<([f64; 3], f64)>,
     pub message: Option<Message>,
     tissues: Vec<TissueEntry>,
     dialog: Option<FileDialog>,
@@ -180,7 +182,7 @@ impl Viewer {
             mode: Mode::Camera,
             cut: CutPlane {
                 on: false,
-                axis: 0,
+                normal: DVec3::X,
                 at: 0.5,
             },
             cut_made: None,
@@ -536,24 +538,44 @@ impl Viewer {
         ));
     }
 
+    /// Turn the cut plane to face the camera, half way across the scene, so
+    /// the section shows what lies straight ahead.
+    pub fn cut_facing_view(&mut self) {
+        self.cut.normal = (self.camera.eye() - self.camera.target)
+            .try_normalize()
+            .unwrap_or(DVec3::Z);
+        self.cut.at = 0.5;
+        self.touch();
+    }
+
     /// The plane's normal and offset in object space.
     pub fn cut_plane(&self) -> Option<(DVec3, f64)> {
         if !self.cut.on {
             return None;
         }
         let (lo, hi) = self.doc.as_ref()?.bounds()?;
-        let mut n = DVec3::ZERO;
-        n[self.cut.axis] = 1.0;
-        Some((
-            n,
-            lo[self.cut.axis] + self.cut.at * (hi - lo)[self.cut.axis],
-        ))
+        let n = self.cut.normal;
+        // The bounds' extent along the normal: their corners' nearest and
+        // farthest.
+        let (near, far) = (0..8)
+            .map(|k| {
+                let corner = DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                n.dot(corner)
+            })
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
+                (a.min(d), b.max(d))
+            });
+        Some((n, near + self.cut.at * (far - near)))
     }
 
     /// Remake the section when the plane moved.
     fn update_section(&mut self) {
         let plane = self.cut_plane().filter(|_| self.has_block());
-        let key = plane.map(|(_, d)| (self.cut.axis, d));
+        let key = plane.map(|(n, d)| (n.to_array(), d));
         if key == self.cut_made {
             return;
         }
@@ -885,9 +907,18 @@ impl Viewer {
         if self.cut.on {
             let before = self.cut;
             ui.horizontal(|ui| {
-                ui.radio_value(&mut self.cut.axis, 0, "x");
-                ui.radio_value(&mut self.cut.axis, 1, "y");
-                ui.radio_value(&mut self.cut.axis, 2, "z");
+                for (normal, name) in [(DVec3::X, "x"), (DVec3::Y, "y"), (DVec3::Z, "z")] {
+                    ui.radio_value(&mut self.cut.normal, normal, name);
+                }
+                if ui
+                    .button("facing me")
+                    .on_hover_text(
+                        "turn the plane to face the camera, through the middle of the scene",
+                    )
+                    .clicked()
+                {
+                    self.cut_facing_view();
+                }
             });
             ui.add(egui::Slider::new(&mut self.cut.at, 0.0..=1.0).text("position"));
             if self.cut != before {

@@ -353,6 +353,12 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     );
     let materials = json["materials"].as_array().unwrap();
     assert!(materials.iter().any(|m| m["alphaMode"] == "BLEND"));
+    // The uterine wall is a closed solid: its back faces are never seen,
+    // so engines may cull them.
+    assert!(
+        materials.iter().all(|m| m["doubleSided"] == false),
+        "a closed organ is single-sided"
+    );
     assert!(
         materials.iter().any(|m| m["normalTexture"].is_object()),
         "bump gives a normal map"
@@ -460,6 +466,8 @@ fn moving_turning_or_scaling_a_texture_changes_only_its_transform() {
         assert_hidden(&baked.report, &format!("transform {k} layered"));
         let (json, bin) = glb_chunks(&baked.glb);
         wall_transforms.push(json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"].clone());
+        // The open cavity can be seen from behind: drawn from both sides.
+        assert_eq!(json["materials"][0]["doubleSided"], true);
         let stripped = without_transforms(json);
         match &reference {
             None => reference = Some((stripped, bin)),

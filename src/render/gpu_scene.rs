@@ -37,6 +37,8 @@ pub(super) struct GpuMaterial {
     pub uniform: wgpu::Buffer,
     pub bind_group: wgpu::BindGroup,
     pub blend: bool,
+    /// Drawn from both sides; a closed organ's back faces are never seen.
+    pub double_sided: bool,
 }
 
 /// A cut surface with the block that textures it.
@@ -314,6 +316,7 @@ impl GpuScene {
                 uniform,
                 bind_group,
                 blend: m.blend,
+                double_sided: m.double_sided,
             });
         }
         let mut primitives = Vec::new();
@@ -469,6 +472,7 @@ mod tests {
             factor: [1.0; 4],
             normal: None,
             blend: false,
+            double_sided: true,
             facet: None,
             role: crate::scene::draw::Role::Tissue,
         };

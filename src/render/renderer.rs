@@ -61,8 +61,10 @@ pub struct Renderer {
     block_layout: wgpu::BindGroupLayout,
     samplers: [wgpu::Sampler; 3],
     block_sampler: wgpu::Sampler,
-    opaque: wgpu::RenderPipeline,
-    blended: wgpu::RenderPipeline,
+    /// Facet triangles, opaque and blended over, each drawn from both
+    /// sides and, for closed organs, from the front only (`cull`).
+    opaque: [wgpu::RenderPipeline; 2],
+    blended: [wgpu::RenderPipeline; 2],
     wire: wgpu::RenderPipeline,
     seam: wgpu::RenderPipeline,
     cut: wgpu::RenderPipeline,
@@ -210,7 +212,8 @@ impl Renderer {
                         (vs, fs): (&str, &str),
                         buffers: &[Option<wgpu::VertexBufferLayout>],
                         topology: wgpu::PrimitiveTopology,
-                        blend: bool| {
+                        blend: bool,
+                        cull: bool| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(layout),
@@ -222,7 +225,7 @@ impl Renderer {
                 },
                 primitive: wgpu::PrimitiveState {
                     topology,
-                    cull_mode: None,
+                    cull_mode: cull.then_some(wgpu::Face::Back),
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -252,24 +255,30 @@ impl Renderer {
         let tri = wgpu::PrimitiveTopology::TriangleList;
         let line = wgpu::PrimitiveTopology::LineList;
         Renderer {
-            opaque: pipeline(
-                "opaque",
-                &facet_layout,
-                &facet,
-                ("vs_main", "fs_main"),
-                &facet_vertices,
-                tri,
-                false,
-            ),
-            blended: pipeline(
-                "blended",
-                &facet_layout,
-                &facet,
-                ("vs_main", "fs_main"),
-                &facet_vertices,
-                tri,
-                true,
-            ),
+            opaque: [false, true].map(|cull| {
+                pipeline(
+                    "opaque",
+                    &facet_layout,
+                    &facet,
+                    ("vs_main", "fs_main"),
+                    &facet_vertices,
+                    tri,
+                    false,
+                    cull,
+                )
+            }),
+            blended: [false, true].map(|cull| {
+                pipeline(
+                    "blended",
+                    &facet_layout,
+                    &facet,
+                    ("vs_main", "fs_main"),
+                    &facet_vertices,
+                    tri,
+                    true,
+                    cull,
+                )
+            }),
             wire: pipeline(
                 "wire",
                 &facet_layout,
@@ -277,6 +286,7 @@ impl Renderer {
                 ("vs_line", "fs_wire"),
                 &facet_vertices,
                 line,
+                false,
                 false,
             ),
             seam: pipeline(
@@ -287,6 +297,7 @@ impl Renderer {
                 &facet_vertices,
                 line,
                 false,
+                false,
             ),
             cut: pipeline(
                 "cut",
@@ -295,6 +306,7 @@ impl Renderer {
                 ("vs_cut", "fs_cut"),
                 &cut_vertices,
                 tri,
+                false,
                 false,
             ),
             globals,
@@ -438,12 +450,13 @@ impl Renderer {
         // Opaque first, then the blend layers in the list's order (the
         // compositor's stacking).
         for blend in [false, true] {
-            pass.set_pipeline(if blend { &self.blended } else { &self.opaque });
             for p in &scene.primitives {
                 let m = &scene.materials[p.material];
                 if m.blend != blend || !shown(p.layer) {
                     continue;
                 }
+                let pipelines = if blend { &self.blended } else { &self.opaque };
+                pass.set_pipeline(&pipelines[!m.double_sided as usize]);
                 pass.set_bind_group(1, &m.bind_group, &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));
                 pass.set_index_buffer(p.indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -167,6 +167,11 @@ pub struct Material {
     pub normal: Option<NormalMap>,
     /// Alpha-blended over what is behind, else opaque.
     pub blend: bool,
+    /// Drawn from both sides (glTF's doubleSided). Not for a closed
+    /// organ, whose back faces are never seen (from inside its cavity, the
+    /// serosa's face away): those are culled, which a software rasteriser
+    /// feels.
+    pub double_sided: bool,
     /// The facet (node, facet id in the node's mesh) whose settings set
     /// the transform.
     pub facet: Option<(usize, usize)>,
@@ -188,6 +193,7 @@ impl Material {
             factor: [1.0; 4],
             normal: None,
             blend: false,
+            double_sided: true,
             facet: None,
             role: Role::Baked,
         }
@@ -353,6 +359,11 @@ impl DrawList {
                     Some(a) => list.atlas_primitives(node, facet, &a[k][j]),
                     None => list.layered_primitives(scene, (k, j)),
                 };
+                if node.topology.boundary_loops().is_empty() {
+                    for p in &primitives {
+                        list.materials[p.material].double_sided = false;
+                    }
+                }
                 list.parts.push(Part {
                     name: format!("{}/{}", node.name, facet.report.facet),
                     node: k,
@@ -401,6 +412,7 @@ impl DrawList {
             factor: [1.0; 4],
             normal: normal.clone(),
             blend,
+            double_sided: true,
             facet: Some((k, j)),
             role: Role::Tissue,
         };
@@ -482,6 +494,7 @@ impl DrawList {
                 factor: [1.0, 1.0, 1.0, s.overlay_opacity as f32],
                 normal: None,
                 blend: true,
+                double_sided: true,
                 facet: Some((k, j)),
                 role: Role::Overlay,
             });

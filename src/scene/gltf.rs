@@ -274,7 +274,7 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
         } else {
             json::material::AlphaMode::Opaque
         }),
-        double_sided: true,
+        double_sided: m.double_sided,
         name: Some(m.name.clone()),
         pbr_metallic_roughness: json::material::PbrMetallicRoughness {
             base_color_factor: json::material::PbrBaseColorFactor(m.factor),

@@ -418,6 +418,19 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
             f.facet.facet
         );
     }
+    // The texel density is set by what the hysteroscope sees: the wall
+    // gets the full size, the serosa (seen only through the canal) does not
+    // blur it.
+    let facet = |name: &str| {
+        baked
+            .report
+            .facets
+            .iter()
+            .find(|f| f.facet.facet == name)
+            .unwrap()
+    };
+    assert!(facet("wall").facet.seen > 0.9 && facet("serosa").facet.seen < 0.2);
+    assert_eq!(facet("wall").atlas.unwrap().into_iter().max(), Some(2048));
     assert_hidden(&baked.report, "atlas");
     let (json, _) = glb_chunks(&baked.glb);
     assert!(

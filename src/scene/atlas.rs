@@ -64,13 +64,15 @@ impl Atlas {
 }
 
 /// The corners of the box holding `facet`'s own faces' charts (uv units
-/// are mesh units).
-fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
+/// are mesh units), or only those of its faces that `keep`.
+fn chart_box_of(facet: &BakedFacet, keep: impl Fn(usize) -> bool) -> (DVec2, DVec2) {
     let piece = &facet.piece;
     let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
     let corners = layer.triangles[..piece.own]
         .iter()
-        .flatten()
+        .enumerate()
+        .filter(|&(f, _)| keep(f))
+        .flat_map(|(_, t)| t)
         .map(|&c| layer.coords[c as usize]);
     corners.fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
@@ -78,30 +80,56 @@ fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
     )
 }
 
+fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
+    chart_box_of(facet, |_| true)
+}
+
 fn extent(f: &BakedFacet) -> DVec2 {
     let (lo, hi) = chart_box(f);
     (hi - lo).max(DVec2::ZERO)
 }
 
-/// The widest facet's chart box side, in mesh units.
-fn widest_chart(nodes: &[BakedNode]) -> f64 {
-    nodes
-        .iter()
-        .flat_map(|n| n.facets.iter().map(|f| extent(f).max_element()))
-        .fold(0.0, f64::max)
+/// The widest box round what the viewpoints see of a facet, in mesh units
+/// (a uterus's serosa is wide, but a hysteroscope sees it only through the
+/// canal: it must not blur the wall); every facet's whole box when nothing
+/// is seen.
+fn widest_seen(nodes: &[BakedNode]) -> f64 {
+    let widest = |keep_seen: bool| {
+        nodes
+            .iter()
+            .flat_map(|n| &n.facets)
+            .map(|f| {
+                let (lo, hi) = chart_box_of(f, |g| !keep_seen || f.seen[g]);
+                (hi - lo).max(DVec2::ZERO).max_element()
+            })
+            .fold(0.0, f64::max)
+    };
+    match widest(true) {
+        w if w > 0.0 => w,
+        _ => widest(false),
+    }
 }
 
-/// Atlas texels per mesh unit when the widest facet's longer side gets
-/// `largest` texels, margins included.
+/// Atlas texels per mesh unit when the widest box round what is seen of a
+/// facet gets `largest` texels, margins included.
 pub fn density(nodes: &[BakedNode], largest: usize) -> f64 {
-    (largest as f64 - 2.0 * MARGIN).max(1.0) / widest_chart(nodes).max(1e-300)
+    (largest as f64 - 2.0 * MARGIN).max(1.0) / widest_seen(nodes).max(1e-300)
 }
 
 /// Bake `facet`'s atlas from `compositor` at `density` texels per mesh
 /// unit (one density across the scene, so a tissue seen across a facet
-/// border is equally sharp on both sides): as wide and as tall as the
-/// facet's charts, plus margins.
-pub fn bake(node: &BakedNode, facet: &BakedFacet, compositor: &Compositor, density: f64) -> Atlas {
+/// border is equally sharp on both sides; lower for a facet too wide for
+/// `largest` texels at it, which only a facet mostly out of sight can be):
+/// as wide and as tall as the facet's charts, plus margins.
+pub fn bake(
+    node: &BakedNode,
+    facet: &BakedFacet,
+    compositor: &Compositor,
+    density: f64,
+    largest: usize,
+) -> Atlas {
+    let fits = (largest as f64 - 2.0 * MARGIN).max(1.0) / extent(facet).max_element().max(1e-300);
+    let density = density.min(fits);
     let piece = &facet.piece;
     let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
     let (lo, _) = chart_box(facet);

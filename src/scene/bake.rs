@@ -364,9 +364,9 @@ fn atlases(
             .facets
             .par_iter()
             .map(|facet| {
-                let b = atlas::bake(node, facet, &node.compositor, density);
+                let b = atlas::bake(node, facet, &node.compositor, density, size);
                 progress.advance(1);
-                let u = atlas::bake(node, facet, &node.unblended, density);
+                let u = atlas::bake(node, facet, &node.unblended, density, size);
                 progress.advance(1);
                 (b, u)
             })

@@ -34,6 +34,8 @@ pub struct BakedFacet {
     /// The facet's piece, its mesh carrying the uvs.
     pub piece: FacetPiece,
     pub band: Vec<BandFace>,
+    /// Per own face: whether a viewpoint sees any of its corners.
+    pub seen: Vec<bool>,
     pub report: FacetReport,
 }
 
@@ -78,6 +80,9 @@ pub struct FacetReport {
     /// the earlier facet's atlas). Must be 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub atlas_overlaps: Option<usize>,
+    /// The share of the facet's area the viewpoints see (a face counts when
+    /// a view sees any of its corners).
+    pub seen: f64,
     pub unwrap_s: f64,
 }
 
@@ -266,6 +271,21 @@ fn build_node(
             piece.mesh = unwrapped.mesh;
             let band = seam_bands(&piece.mesh, &unwrapped.topology, spec.bake.seam_band);
             let m = unwrapped.report.metrics.clone();
+            let seen: Vec<bool> = piece.mesh.triangles[..piece.own]
+                .iter()
+                .map(|t| {
+                    t.iter()
+                        .any(|&v| unwrapped.visibility.vertex[v as usize] > 0.0)
+                })
+                .collect();
+            let (mut seen_area, mut area) = (0.0, 0.0);
+            for (f, &s) in seen.iter().enumerate() {
+                let a = piece.mesh.face_area(f);
+                area += a;
+                if s {
+                    seen_area += a;
+                }
+            }
             let atlas_overlaps = for_atlases.then(|| {
                 let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
                 let mut faces: Vec<u32> =
@@ -297,11 +317,13 @@ fn build_node(
                         .collect(),
                     metrics: m,
                     atlas_overlaps,
+                    seen: seen_area / area.max(1e-300),
                     unwrap_s: start.elapsed().as_secs_f64(),
                 },
                 settings: facet_settings,
                 piece,
                 band,
+                seen,
             })
         })
         .collect::<Result<_>>()?;

@@ -98,9 +98,9 @@ pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
     // Insets proportional to each face's height compared points farther
     // apart across a facet border (the faces along it are tall) than
     // across the ordinary edges of those faces: the default scene's atlas
-    // border figure sat near 1.12 and swung from 1.02 to 1.22 with the
-    // tissues' offsets alone, for a blend with no step (at one distance:
-    // near 1.03, from 0.90 to 1.11).
+    // border figure sat near 1.12, from 1.02 to 1.22 with the tissues'
+    // offsets alone, for a blend with no step (at one distance, with the
+    // atlas fixes that came with it: from 1.00 to 1.06).
     let mut lengths: Vec<f64> = (0..topo.num_edges())
         .map(|e| {
             let [a, b] = topo.edge_vertices(EdgeId::from(e));

@@ -213,6 +213,38 @@ fn a_wall_thickness_closes_the_cavity_into_a_solid_a_cut_shows() {
     assert_eq!(err.key, "wall_thickness");
 }
 
+#[test]
+fn a_closed_mesh_wound_inside_out_stays_double_sided() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = organtex::mesh::io::read(&root().join("tests/data/cube.obj")).unwrap();
+    let mut inside_out = cube.clone();
+    for t in &mut inside_out.triangles {
+        t.swap(1, 2);
+    }
+    for (name, mesh, double_sided) in [("out", &cube, false), ("in", &inside_out, true)] {
+        let file = dir.path().join(format!("{name}.obj"));
+        organtex::mesh::io::write_obj(&file, mesh, None).unwrap();
+        let scene = scene_file(
+            dir.path(),
+            &format!("{name}.toml"),
+            &format!(
+                "[[node]]\nname = \"cube\"\nmesh = {{ file = {file:?} }}\n[[node.facet]]\nname = \"*\"\ntexture = \"fundus-tissue\"\n"
+            ),
+        );
+        let baked = bake(
+            &scene,
+            &dir.path().join(name),
+            &BakeOptions::default(),
+            &Silent,
+        )
+        .unwrap();
+        let (json, _) = glb_chunks(&baked.glb);
+        for m in json["materials"].as_array().unwrap() {
+            assert_eq!(m["doubleSided"], double_sided, "{name}: {}", m["name"]);
+        }
+    }
+}
+
 /// Pairs of faces sharing no vertex that cross each other, found through a
 /// grid of cells a few triangles wide.
 fn self_intersections(mesh: &TriMesh) -> usize {

@@ -359,7 +359,9 @@ impl DrawList {
                     Some(a) => list.atlas_primitives(node, facet, &a[k][j]),
                     None => list.layered_primitives(scene, (k, j)),
                 };
-                if node.topology.boundary_loops().is_empty() {
+                // Closed and facing out (a file's mesh may be wound inside
+                // out: that one stays double-sided).
+                if node.topology.boundary_loops().is_empty() && node.mesh.signed_volume() > 0.0 {
                     for p in &primitives {
                         list.materials[p.material].double_sided = false;
                     }

@@ -3,7 +3,7 @@
 //! failure, not a skip.
 
 mod common;
-use common::lit_pixels;
+use common::{changed_pixels, lit_pixels};
 use glam::DVec3;
 use organtex::progress::Silent;
 use organtex::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
@@ -88,11 +88,7 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
         ),
     ] {
         let other = draw(layers);
-        let changed = full
-            .pixels()
-            .zip(other.pixels())
-            .filter(|(a, b)| a != b)
-            .count();
+        let changed = changed_pixels(&full, &other);
         assert!(
             changed > 100,
             "toggling {name} changes the picture ({changed} pixels)"

@@ -6,7 +6,7 @@
 mod common;
 use std::time::{Duration, Instant};
 
-use common::lit_pixels;
+use common::{changed_pixels, lit_pixels};
 
 use eframe::egui;
 use egui_kittest::Harness;
@@ -188,11 +188,7 @@ fn the_clinician_flow() {
     assert_ne!(h.state().cut.at, at, "ctrl-drag moved the cut plane");
     h.run_steps(2);
     let moved_cut = h.state().read_scene().unwrap();
-    let changed = with_cut
-        .pixels()
-        .zip(moved_cut.pixels())
-        .filter(|(a, b)| a != b)
-        .count();
+    let changed = changed_pixels(&with_cut, &moved_cut);
     assert!(
         changed > 1000,
         "moving the cut plane changes the picture ({changed} pixels)"
@@ -210,11 +206,7 @@ fn the_clinician_flow() {
     );
     assert!(h.state().cut_triangles() > 0, "the facing section is drawn");
     let facing = h.state().read_scene().unwrap();
-    let changed = moved_cut
-        .pixels()
-        .zip(facing.pixels())
-        .filter(|(a, b)| a != b)
-        .count();
+    let changed = changed_pixels(&moved_cut, &facing);
     assert!(
         changed > 1000,
         "turning the cut plane changes the picture ({changed} pixels)"

@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use super::build::{BakedFacet, BakedNode};
 use super::composite::{Compositor, linear_to_srgb};
 use crate::raster;
+use crate::unwrap::metrics::bounds;
 
 /// A facet's baked texture and where its chart sits in it.
 #[derive(Clone, Debug)]
@@ -68,25 +69,18 @@ impl Atlas {
 fn chart_box_of(facet: &BakedFacet, keep: impl Fn(usize) -> bool) -> (DVec2, DVec2) {
     let piece = &facet.piece;
     let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
-    let corners = layer.triangles[..piece.own]
-        .iter()
-        .enumerate()
-        .filter(|&(f, _)| keep(f))
-        .flat_map(|(_, t)| t)
-        .map(|&c| layer.coords[c as usize]);
-    corners.fold(
-        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    bounds(
+        layer.triangles[..piece.own]
+            .iter()
+            .enumerate()
+            .filter(|&(f, _)| keep(f))
+            .flat_map(|(_, t)| t)
+            .map(|&c| layer.coords[c as usize]),
     )
 }
 
 fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
     chart_box_of(facet, |_| true)
-}
-
-fn extent(f: &BakedFacet) -> DVec2 {
-    let (lo, hi) = chart_box(f);
-    (hi - lo).max(DVec2::ZERO)
 }
 
 /// The widest box round what the viewpoints see of a facet, in mesh units
@@ -128,13 +122,14 @@ pub fn bake(
     density: f64,
     largest: usize,
 ) -> Atlas {
-    let fits = (largest as f64 - 2.0 * MARGIN).max(1.0) / extent(facet).max_element().max(1e-300);
+    let (lo, hi) = chart_box(facet);
+    let size = (hi - lo).max(DVec2::ZERO);
+    let fits = (largest as f64 - 2.0 * MARGIN).max(1.0) / size.max_element().max(1e-300);
     let density = density.min(fits);
     let piece = &facet.piece;
     let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
-    let (lo, _) = chart_box(facet);
     let side = |e: f64| ((e * density - 1e-6).ceil() as usize + 2 * MARGIN as usize).max(16);
-    let (width, height) = (side(extent(facet).x), side(extent(facet).y));
+    let (width, height) = (side(size.x), side(size.y));
     let mut atlas = Atlas {
         width,
         height,

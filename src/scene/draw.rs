@@ -354,14 +354,16 @@ impl DrawList {
     pub fn of(scene: &BakedScene, atlases: Option<&[Vec<Atlas>]>) -> DrawList {
         let mut list = DrawList::default();
         for (k, node) in scene.nodes.iter().enumerate() {
+            // Closed and facing out: single-sided (a file's mesh may be
+            // wound inside out: that one stays double-sided).
+            let single_sided =
+                node.topology.boundary_loops().is_empty() && node.mesh.signed_volume() > 0.0;
             for (j, facet) in node.facets.iter().enumerate() {
                 let primitives = match atlases {
                     Some(a) => list.atlas_primitives(node, facet, &a[k][j]),
                     None => list.layered_primitives(scene, (k, j)),
                 };
-                // Closed and facing out (a file's mesh may be wound inside
-                // out: that one stays double-sided).
-                if node.topology.boundary_loops().is_empty() && node.mesh.signed_volume() > 0.0 {
+                if single_sided {
                     for p in &primitives {
                         list.materials[p.material].double_sided = false;
                     }

@@ -154,10 +154,7 @@ fn checker(uv: DVec2, cell: f64) -> f64 {
 }
 
 fn uv_extent(layer: &UvLayer) -> (DVec2, DVec2) {
-    layer.coords.iter().fold(
-        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &u| (lo.min(u), hi.max(u)),
-    )
+    super::metrics::bounds(layer.coords.iter().copied())
 }
 
 /// The mesh textured with a checker through its uvs: squares stay square

@@ -69,6 +69,15 @@ pub fn split_edges(
         .collect()
 }
 
+/// The corners of the box round `points` (lower-left, upper-right); empty:
+/// infinite corners the wrong way round.
+pub fn bounds(points: impl IntoIterator<Item = DVec2>) -> (DVec2, DVec2) {
+    points.into_iter().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
+}
+
 /// Signed double area of a uv triangle (positive counter-clockwise).
 #[inline]
 pub fn double_area(q: [DVec2; 3]) -> f64 {

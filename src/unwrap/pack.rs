@@ -32,9 +32,7 @@ pub fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
     let scale = (chart.area() / uv_area.max(1e-300)).sqrt();
     let turn = tightest_turn(&uv);
     let uv: Vec<DVec2> = uv.into_iter().map(|u| turn.rotate(u) * scale).collect();
-    let lo = uv
-        .iter()
-        .fold(DVec2::splat(f64::INFINITY), |m, &u| m.min(u));
+    let (lo, _) = metrics::bounds(uv.iter().copied());
     uv.into_iter().map(|u| u - lo).collect()
 }
 
@@ -92,13 +90,7 @@ fn tightest_turn(points: &[DVec2]) -> DVec2 {
         };
         // Turning by the inverse of `along` lays this edge along x.
         let turn = DVec2::new(along.x, -along.y);
-        let (lo, hi) = hull.iter().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| {
-                let q = turn.rotate(p);
-                (lo.min(q), hi.max(q))
-            },
-        );
+        let (lo, hi) = metrics::bounds(hull.iter().map(|&p| turn.rotate(p)));
         let size = hi - lo;
         let area = size.x * size.y;
         if area < best.0 * (1.0 - 1e-9) {
@@ -164,10 +156,7 @@ mod tests {
         let turned: Vec<DVec2> = shape.iter().map(|&p| angle.rotate(p)).collect();
         let turn = tightest_turn(&turned);
         let back: Vec<DVec2> = turned.iter().map(|&p| turn.rotate(p)).collect();
-        let (lo, hi) = back.iter().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
+        let (lo, hi) = metrics::bounds(back.iter().copied());
         let size = hi - lo;
         assert!(
             (size.x - 4.0).abs() < 1e-9 && (size.y - 1.0).abs() < 1e-9,

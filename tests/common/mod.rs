@@ -30,3 +30,8 @@ pub fn lit_pixels(img: &image::RgbaImage) -> (usize, f64, f64) {
     let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n;
     (lum.len(), mean, var)
 }
+
+/// How many pixels differ between two pictures of the same size.
+pub fn changed_pixels(a: &image::RgbaImage, b: &image::RgbaImage) -> usize {
+    a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count()
+}

@@ -1,8 +1,10 @@
 //! Flatten a disk-shaped chart: ABF++ angles laid out by least squares;
 //! when ABF++ fails or its layout flips a triangle, boundary first
 //! flattening (the conformal map Seamster's estimate describes), and LSCM
-//! last. When ABF++ only stops at its step cap (raw scans), its best
-//! iterate's layout and boundary first flattening's compete: the more
+//! last. When ABF++ does not converge (raw scans: it stops at its step
+//! cap, or earlier once it stalls and the layout of its best iterate has
+//! settled, `abf::solve_until`), that layout and boundary first
+//! flattening's compete: the more
 //! conformal one without flips is kept. A fallback is reported with the
 //! reason, never silent. Whatever flattened the chart, area balancing
 //! follows (`balance`).
@@ -26,8 +28,8 @@ pub enum Method {
     AbfPlusPlus {
         iterations: usize,
         residual: f64,
-        /// False when ABF++ stopped at its step cap: the angles are its
-        /// best iterate, kept because their layout has no flips and boundary
+        /// False when ABF++ stopped at its step cap or stalled with a
+        /// settled layout: the angles are its best iterate, kept because their layout has no flips and boundary
         /// first flattening's flipped or was less conformal.
         converged: bool,
         /// Triangles the layout flipped and `untangle` unfolded.
@@ -93,7 +95,13 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
     let balanced = |uv: Vec<DVec2>| {
         balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0))
     };
-    let solved = abf::solve(chart, topo, opts).and_then(|solution| {
+    // A stalled ABF++ iterate is scored by its layout's conformality, when
+    // that has no flips left after unfolding.
+    let mut score = |angles: &[[f64; 3]]| {
+        let (uv, _, left) = unfold(layout::from_angles(chart, topo, angles).ok()?);
+        (left == 0).then(|| conf_mean(chart, &uv))
+    };
+    let solved = abf::solve_until(chart, topo, opts, &mut score).and_then(|solution| {
         let uv = layout::from_angles(chart, topo, &solution.angles)?;
         Ok((solution, uv))
     });

@@ -68,8 +68,8 @@ pub struct AbfSolution {
     pub residual: f64,
     /// Whether the residual fell below the tolerance; if not, `angles` is
     /// the iterate with the smallest residual in `max_iterations` steps,
-    /// or, when the run stalled and its layout settled (`solve_until`),
-    /// the best-scored iterate.
+    /// or, when the run stalled and its layout stopped improving
+    /// (`solve_until`), the best-scored iterate.
     pub converged: bool,
 }
 
@@ -153,7 +153,6 @@ struct Residuals {
     c_vertex: Vec<f64>,
 }
 
-/// Flatten a disk-shaped chart's angles.
 /// Newton steps over which a stall is judged: the best residual must at
 /// least halve in this many steps.
 const STALL_WINDOW: usize = 10;
@@ -161,7 +160,8 @@ const STALL_WINDOW: usize = 10;
 /// since the last stall.
 const SETTLED: f64 = 1e-3;
 
-/// ABF++ to convergence or the step cap.
+/// Flatten a disk-shaped chart's angles: ABF++ to convergence or the
+/// step cap.
 pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSolution> {
     solve_until(mesh, topo, opts, &mut |_| None)
 }

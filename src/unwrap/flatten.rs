@@ -2,12 +2,11 @@
 //! when ABF++ fails or its layout flips a triangle, boundary first
 //! flattening (the conformal map Seamster's estimate describes), and LSCM
 //! last. When ABF++ does not converge (raw scans: it stops at its step
-//! cap, or earlier once it stalls and the layout of its best iterate has
-//! settled, `abf::solve_until`), that layout and boundary first
-//! flattening's compete: the more
-//! conformal one without flips is kept. A fallback is reported with the
-//! reason, never silent. Whatever flattened the chart, area balancing
-//! follows (`balance`).
+//! cap, or earlier once it stalls and the layout of its best iterate
+//! stops improving, `abf::solve_until`), that layout and boundary first
+//! flattening's compete: the more conformal one without flips is kept. A
+//! fallback is reported with the reason, never silent. Whatever flattened
+//! the chart, area balancing follows (`balance`).
 
 use glam::DVec2;
 use serde::Serialize;
@@ -28,9 +27,10 @@ pub enum Method {
     AbfPlusPlus {
         iterations: usize,
         residual: f64,
-        /// False when ABF++ stopped at its step cap or stalled with a
-        /// settled layout: the angles are its best iterate, kept because their layout has no flips and boundary
-        /// first flattening's flipped or was less conformal.
+        /// False when ABF++ stopped at its step cap, or stalled with a
+        /// layout that stopped improving: the angles are its best iterate,
+        /// kept because their layout has no flips and boundary first
+        /// flattening's flipped or was less conformal.
         converged: bool,
         /// Triangles the layout flipped and `untangle` unfolded.
         unfolded: usize,

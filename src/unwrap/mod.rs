@@ -175,10 +175,10 @@ pub fn unwrap_seen(
         .collect::<Result<_>>()?;
 
     // One uv layer: every piece's cut vertices, charts side by side.
-    let offsets = pack::shelves(
+    let offsets = pack::outlines(
         &pieces
             .iter()
-            .map(|p| pack::extent(&p.uv))
+            .map(|p| (&p.cut_triangles[..], &p.uv[..]))
             .collect::<Vec<_>>(),
     );
     let mut coords = Vec::new();
@@ -277,10 +277,11 @@ fn unwrap_piece(
             pack::normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
         })
         .collect();
-    let offsets = pack::shelves(
-        &normalised
+    let offsets = pack::outlines(
+        &charts
             .iter()
-            .map(|uv| pack::extent(uv))
+            .zip(&normalised)
+            .map(|(c, uv)| (&c.triangles[..], &uv[..]))
             .collect::<Vec<_>>(),
     );
     let mut uv = Vec::new();

@@ -1,5 +1,7 @@
 //! Charts laid out for textures: each at mesh scale and turned to fill its
-//! bounding rectangle best, then packed side by side.
+//! bounding rectangle best, then packed by their outlines (`outlines`: a
+//! small chart may sit in a large one's notch), or side by side on shelves
+//! when there are many.
 //!
 //! An atlas spends a texel on every point of a chart's bounding rectangle,
 //! so the rectangle should be the smallest one round the chart: it has a
@@ -44,7 +46,7 @@ pub fn normalise(chart: &TriMesh, uv: Vec<DVec2>) -> Vec<DVec2> {
 pub fn shelves(sizes: &[DVec2]) -> Vec<DVec2> {
     let total_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
     let widest = sizes.iter().map(|s| s.x).fold(0.0, f64::max);
-    let margin = 0.02 * total_area.sqrt().max(widest);
+    let margin = shelf_margin(sizes);
     let all_in_a_row: f64 = sizes.iter().map(|s| s.x + margin).sum();
     let mut order: Vec<usize> = (0..sizes.len()).collect();
     order.sort_by(|&a, &b| sizes[b].y.total_cmp(&sizes[a].y).then(a.cmp(&b)));
@@ -75,6 +77,238 @@ pub fn shelves(sizes: &[DVec2]) -> Vec<DVec2> {
             _ => Some(next),
         })
         .map_or_else(Vec::new, |(_, offsets)| offsets)
+}
+
+/// Charts (triangles and uvs from the origin) placed by their outlines,
+/// not their boxes: each, largest first, at the lowest then leftmost free
+/// spot on a grid of about `GRID` cells across, so a small chart can sit
+/// in a large one's notch. Keeps `shelves`' margin between charts and,
+/// like it, keeps the row width whose layout has the smallest box; more
+/// than `MAX_OUTLINED` charts are packed by `shelves` (each placement
+/// scans the grid). Hand-written: texture-packing crates pack rectangles.
+pub fn outlines(charts: &[(&[[u32; 3]], &[DVec2])]) -> Vec<DVec2> {
+    let sizes: Vec<DVec2> = charts.iter().map(|(_, uv)| extent(uv)).collect();
+    if charts.len() < 2 || charts.len() > MAX_OUTLINED {
+        return shelves(&sizes);
+    }
+    let box_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
+    let widest = sizes.iter().map(|s| s.x).fold(0.0, f64::max);
+    let margin = shelf_margin(&sizes);
+    let cell = box_area.sqrt().max(widest) / GRID as f64;
+    if !cell.is_finite() || cell <= 0.0 {
+        return shelves(&sizes);
+    }
+    let gap = (margin / cell).ceil() as usize;
+    let masks: Vec<Mask> = charts
+        .iter()
+        .map(|(triangles, uv)| Mask::of(triangles, uv, cell))
+        .collect();
+    let mut order: Vec<usize> = (0..charts.len()).collect();
+    order.sort_by(|&a, &b| masks[b].count().cmp(&masks[a].count()).then(a.cmp(&b)));
+    let grown: Vec<Mask> = masks.iter().map(|m| m.dilated(gap)).collect();
+    let widest_cells = masks.iter().map(|m| m.width).max().unwrap_or(0);
+    let all_in_a_row: usize = masks.iter().map(|m| m.width + gap).sum();
+    let layout = |row_width: usize| {
+        let mut free = Grid::new(row_width);
+        let mut offsets = vec![DVec2::ZERO; charts.len()];
+        let mut corner = DVec2::ZERO;
+        for &i in &order {
+            let (x, y) = free.lowest_fit(&grown[i]);
+            free.occupy(&masks[i], x + gap, y + gap);
+            // The mask's cell (0, 0) holds the chart's origin.
+            offsets[i] = DVec2::new((x + gap) as f64, (y + gap) as f64) * cell;
+            corner = corner.max(offsets[i] + sizes[i]);
+        }
+        // The first chart's margin from the layout's edge is not needed.
+        let lo = offsets.iter().fold(DVec2::INFINITY, |m, &o| m.min(o));
+        let corner = corner - lo;
+        let offsets = offsets.into_iter().map(|o| o - lo).collect();
+        (corner.x * corner.y, offsets)
+    };
+    const WIDTHS: usize = 8;
+    (0..=WIDTHS)
+        .map(|k| {
+            widest_cells
+                + gap
+                + ((all_in_a_row.saturating_sub(widest_cells)) as f64
+                    * (k as f64 / WIDTHS as f64).powi(2)) as usize
+        })
+        .chain([(box_area.sqrt() / cell) as usize + widest_cells / 2])
+        .map(|w| layout(w.max(widest_cells + 2 * gap)))
+        .fold(None, |best: Option<(f64, Vec<DVec2>)>, next| match best {
+            Some(b) if b.0 <= next.0 => Some(b),
+            _ => Some(next),
+        })
+        .map_or_else(Vec::new, |(_, offsets)| offsets)
+}
+
+/// Cells across the square of the charts' total box area (`outlines`).
+const GRID: usize = 160;
+/// The most charts `outlines` places one by one.
+const MAX_OUTLINED: usize = 64;
+
+/// The cells a chart covers: row by row, bits from the left.
+struct Mask {
+    width: usize,
+    rows: Vec<Vec<u64>>,
+}
+
+impl Mask {
+    /// Every cell of side `cell` that a triangle touches (triangle and
+    /// square overlap: no separating axis among the square's two and the
+    /// triangle's three edge normals).
+    fn of(triangles: &[[u32; 3]], uv: &[DVec2], cell: f64) -> Mask {
+        let size = extent(uv) / cell;
+        let (width, height) = (size.x.ceil() as usize + 1, size.y.ceil() as usize + 1);
+        let mut mask = Mask::empty(width, height);
+        for t in triangles {
+            let p = t.map(|v| uv[v as usize] / cell);
+            let lo = p[0].min(p[1]).min(p[2]).max(DVec2::ZERO);
+            let hi = p[0].max(p[1]).max(p[2]);
+            for y in lo.y.floor() as usize..=(hi.y.floor() as usize).min(height - 1) {
+                for x in lo.x.floor() as usize..=(hi.x.floor() as usize).min(width - 1) {
+                    if touches(&p, DVec2::new(x as f64, y as f64)) {
+                        mask.set(x, y);
+                    }
+                }
+            }
+        }
+        mask
+    }
+
+    fn empty(width: usize, height: usize) -> Mask {
+        Mask {
+            width,
+            rows: vec![vec![0; width.div_ceil(64)]; height],
+        }
+    }
+
+    fn set(&mut self, x: usize, y: usize) {
+        self.rows[y][x / 64] |= 1 << (x % 64);
+    }
+
+    fn get(&self, x: usize, y: usize) -> bool {
+        self.rows[y][x / 64] >> (x % 64) & 1 == 1
+    }
+
+    fn count(&self) -> u32 {
+        self.rows.iter().flatten().map(|w| w.count_ones()).sum()
+    }
+
+    /// Grown by `by` cells on every side (a square neighbourhood), shifted
+    /// so the original cell (0, 0) is at (`by`, `by`).
+    fn dilated(&self, by: usize) -> Mask {
+        let height = self.rows.len();
+        let mut out = Mask::empty(self.width + 2 * by, height + 2 * by);
+        for y in 0..height {
+            for x in (0..self.width).filter(|&x| self.get(x, y)) {
+                for yy in y..=y + 2 * by {
+                    for xx in x..=x + 2 * by {
+                        out.set(xx, yy);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Whether the triangle `p` and the unit square at `corner` overlap.
+fn touches(p: &[DVec2; 3], corner: DVec2) -> bool {
+    let square = [
+        corner,
+        corner + DVec2::X,
+        corner + DVec2::ONE,
+        corner + DVec2::Y,
+    ];
+    let separated = |axis: DVec2| {
+        let span = |q: &[DVec2]| {
+            q.iter()
+                .map(|v| v.dot(axis))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
+                    (a.min(d), b.max(d))
+                })
+        };
+        let (a, b) = (span(p), span(&square));
+        a.1 < b.0 || b.1 < a.0
+    };
+    let axes = [
+        DVec2::X,
+        DVec2::Y,
+        (p[1] - p[0]).perp(),
+        (p[2] - p[1]).perp(),
+        (p[0] - p[2]).perp(),
+    ];
+    !axes.iter().any(|&a| separated(a))
+}
+
+/// The occupied cells of a layout `width` cells wide, growing upwards.
+struct Grid {
+    mask: Mask,
+}
+
+impl Grid {
+    fn new(width: usize) -> Grid {
+        Grid {
+            mask: Mask::empty(width, 0),
+        }
+    }
+
+    /// Whether `m` placed with its cell (0, 0) at (x, y) covers an
+    /// occupied cell (rows above the layout are free).
+    fn collides(&self, m: &Mask, x: usize, y: usize) -> bool {
+        m.rows.iter().enumerate().any(|(dy, row)| {
+            let Some(free) = self.mask.rows.get(y + dy) else {
+                return false;
+            };
+            row.iter().enumerate().any(|(k, &bits)| {
+                if bits == 0 {
+                    return false;
+                }
+                // Bits k*64.. of the mask land at x + k*64..: two words.
+                let at = x + 64 * k;
+                let (word, shift) = (at / 64, at % 64);
+                let low = bits << shift;
+                let high = if shift == 0 { 0 } else { bits >> (64 - shift) };
+                free.get(word).is_some_and(|&w| w & low != 0)
+                    || free.get(word + 1).is_some_and(|&w| w & high != 0)
+            })
+        })
+    }
+
+    /// The lowest, then leftmost, spot where `m` fits inside the width.
+    fn lowest_fit(&self, m: &Mask) -> (usize, usize) {
+        let span = self.mask.width.saturating_sub(m.width);
+        (0..)
+            .find_map(|y| {
+                (0..=span)
+                    .find(|&x| !self.collides(m, x, y))
+                    .map(|x| (x, y))
+            })
+            .expect("the rows above the layout are free")
+    }
+
+    fn occupy(&mut self, m: &Mask, x: usize, y: usize) {
+        let words = self.mask.width.div_ceil(64);
+        while self.mask.rows.len() < y + m.rows.len() {
+            self.mask.rows.push(vec![0; words]);
+        }
+        for (dy, _) in m.rows.iter().enumerate() {
+            for dx in (0..m.width).filter(|&dx| m.get(dx, dy)) {
+                if x + dx < self.mask.width {
+                    self.mask.set(x + dx, y + dy);
+                }
+            }
+        }
+    }
+}
+
+/// The gap left between packed charts: 2% of the side of their total box
+/// area (or of the widest).
+fn shelf_margin(sizes: &[DVec2]) -> f64 {
+    let total_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
+    let widest = sizes.iter().map(|s| s.x).fold(0.0, f64::max);
+    0.02 * total_area.sqrt().max(widest)
 }
 
 /// The rotation (as a unit vector, applied with `DVec2::rotate`) that lays
@@ -169,6 +403,55 @@ mod tests {
                 .sum::<f64>()
         };
         assert!((area(&back) - area(&shape)).abs() < 1e-9);
+    }
+
+    /// Triangles of unit squares at `cells` (x, y), with their uvs.
+    fn squares(cells: &[(f64, f64)], side: f64) -> (Vec<[u32; 3]>, Vec<DVec2>) {
+        let mut uv = Vec::new();
+        let mut triangles = Vec::new();
+        for &(x, y) in cells {
+            let b = uv.len() as u32;
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                uv.push(DVec2::new(x + dx, y + dy) * side);
+            }
+            triangles.extend([[b, b + 1, b + 2], [b, b + 2, b + 3]]);
+        }
+        (triangles, uv)
+    }
+
+    #[test]
+    fn a_small_chart_sits_in_a_large_ones_notch_without_overlapping_it() {
+        // A 4 x 4 L missing its upper-right 2 x 2 quarter, and a 1.5 x 1.5
+        // square: shelves put them side by side, outlines in the notch.
+        let (l_tris, l_uv) = squares(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)], 2.0);
+        let (s_tris, s_uv) = squares(&[(0.0, 0.0)], 1.5);
+        let charts = [(&l_tris[..], &l_uv[..]), (&s_tris[..], &s_uv[..])];
+        let offsets = outlines(&charts);
+        let placed: Vec<Vec<DVec2>> = charts
+            .iter()
+            .zip(&offsets)
+            .map(|((_, uv), &o)| uv.iter().map(|&u| u + o).collect())
+            .collect();
+        let (lo, hi) = metrics::bounds(placed.iter().flatten().copied());
+        let packed = (hi - lo).x * (hi - lo).y;
+        let sizes = [extent(&l_uv), extent(&s_uv)];
+        let shelf = shelves(&sizes);
+        let shelf_corner = (0..2).fold(DVec2::ZERO, |m, i| m.max(shelf[i] + sizes[i]));
+        assert!(
+            packed < 0.8 * shelf_corner.x * shelf_corner.y,
+            "outlines {packed}, shelves {}",
+            shelf_corner.x * shelf_corner.y
+        );
+        assert!((hi - lo).x < 4.5 && (hi - lo).y < 4.5, "{lo} {hi}");
+        // The square lies in the notch, off the L by at least the margin.
+        let (s_lo, s_hi) = metrics::bounds(placed[1].iter().copied());
+        let margin = shelf_margin(&sizes);
+        let l_lo = offsets[0];
+        assert!(
+            s_lo.x >= l_lo.x + 2.0 + margin * 0.99 && s_lo.y >= l_lo.y + 2.0 + margin * 0.99,
+            "square at {s_lo}..{s_hi}, L from {l_lo}"
+        );
+        assert!(s_hi.x <= l_lo.x + 4.0 + margin && s_hi.y <= l_lo.y + 4.0 + margin);
     }
 
     #[test]

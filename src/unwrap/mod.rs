@@ -175,7 +175,7 @@ pub fn unwrap_seen(
         .collect::<Result<_>>()?;
 
     // One uv layer: every piece's cut vertices, charts side by side.
-    let offsets = pack::outlines(
+    let placements = pack::outlines(
         &pieces
             .iter()
             .map(|p| (&p.cut_triangles[..], &p.uv[..]))
@@ -186,9 +186,9 @@ pub fn unwrap_seen(
     let mut seams = Vec::new();
     let mut terminals = Vec::new();
     let mut timings = Timings::default();
-    for (piece, offset) in pieces.iter().zip(offsets) {
+    for (piece, placement) in pieces.iter().zip(placements) {
         let base = coords.len() as u32;
-        coords.extend(piece.uv.iter().map(|&u| u + offset));
+        coords.extend(placement.apply(&piece.uv));
         for (k, f) in piece.faces.iter().enumerate() {
             uv_triangles[f.idx()] = piece.cut_triangles[k].map(|v| v + base);
         }
@@ -277,7 +277,7 @@ fn unwrap_piece(
             pack::normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
         })
         .collect();
-    let offsets = pack::outlines(
+    let placements = pack::outlines(
         &charts
             .iter()
             .zip(&normalised)
@@ -286,9 +286,9 @@ fn unwrap_piece(
     );
     let mut uv = Vec::new();
     let mut cut_triangles = vec![[0u32; 3]; faces.len()];
-    for ((chart, chart_uv), offset) in charts.iter().zip(&normalised).zip(offsets) {
+    for ((chart, chart_uv), placement) in charts.iter().zip(&normalised).zip(placements) {
         let base = uv.len() as u32;
-        uv.extend(chart_uv.iter().map(|&u| u + offset));
+        uv.extend(placement.apply(chart_uv));
         for (k, &f) in chart.faces.iter().enumerate() {
             cut_triangles[f as usize] = chart.triangles[k].map(|v| v + base);
         }

@@ -1,7 +1,7 @@
 //! Charts laid out for textures: each at mesh scale and turned to fill its
 //! bounding rectangle best, then packed by their outlines (`outlines`: a
-//! small chart may sit in a large one's notch), or side by side on shelves
-//! when there are many.
+//! small chart may sit in a large one's notch, turned), or side by side on
+//! shelves when there are many.
 //!
 //! An atlas spends a texel on every point of a chart's bounding rectangle,
 //! so the rectangle should be the smallest one round the chart: it has a
@@ -82,48 +82,96 @@ pub fn shelves(sizes: &[DVec2]) -> Vec<DVec2> {
 /// Charts (triangles and uvs from the origin) placed by their outlines,
 /// not their boxes: each, largest first, at the lowest then leftmost free
 /// spot on a grid of about `GRID` cells across, so a small chart can sit
-/// in a large one's notch. Keeps `shelves`' margin between charts and,
-/// like it, keeps the row width whose layout has the smallest box; more
+/// in a large one's notch; a chart may be given quarter turns to fit
+/// lower. Keeps `shelves`' margin between charts and, like it, tries
+/// several row widths, each with and without turns (greedy turning can
+/// leave a larger box), keeping the layout with the smallest box. More
 /// than `MAX_OUTLINED` charts are packed by `shelves` (each placement
 /// scans the grid). Hand-written: texture-packing crates pack rectangles.
-pub fn outlines(charts: &[(&[[u32; 3]], &[DVec2])]) -> Vec<DVec2> {
+pub fn outlines(charts: &[(&[[u32; 3]], &[DVec2])]) -> Vec<Placement> {
     let sizes: Vec<DVec2> = charts.iter().map(|(_, uv)| extent(uv)).collect();
+    let unturned = |offsets: Vec<DVec2>| {
+        offsets
+            .into_iter()
+            .map(|offset| Placement { turns: 0, offset })
+            .collect()
+    };
     if charts.len() < 2 || charts.len() > MAX_OUTLINED {
-        return shelves(&sizes);
+        return unturned(shelves(&sizes));
     }
     let box_area: f64 = sizes.iter().map(|s| s.x * s.y).sum();
-    let widest = sizes.iter().map(|s| s.x).fold(0.0, f64::max);
+    let widest = sizes.iter().map(|s| s.x.max(s.y)).fold(0.0, f64::max);
     let margin = shelf_margin(&sizes);
     let cell = box_area.sqrt().max(widest) / GRID as f64;
     if !cell.is_finite() || cell <= 0.0 {
-        return shelves(&sizes);
+        return unturned(shelves(&sizes));
     }
     let gap = (margin / cell).ceil() as usize;
-    let masks: Vec<Mask> = charts
+    // Per chart and quarter turn: its cells, and its cells grown by the gap.
+    let masks: Vec<Vec<(Mask, Mask)>> = charts
         .iter()
-        .map(|(triangles, uv)| Mask::of(triangles, uv, cell))
+        .map(|(triangles, uv)| {
+            (0..TURNS)
+                .map(|t| {
+                    let m = Mask::of(triangles, &turned(uv, t), cell);
+                    let grown = m.dilated(gap);
+                    (m, grown)
+                })
+                .collect()
+        })
         .collect();
     let mut order: Vec<usize> = (0..charts.len()).collect();
-    order.sort_by(|&a, &b| masks[b].count().cmp(&masks[a].count()).then(a.cmp(&b)));
-    let grown: Vec<Mask> = masks.iter().map(|m| m.dilated(gap)).collect();
-    let widest_cells = masks.iter().map(|m| m.width).max().unwrap_or(0);
-    let all_in_a_row: usize = masks.iter().map(|m| m.width + gap).sum();
-    let layout = |row_width: usize| {
+    order.sort_by(|&a, &b| {
+        masks[b][0]
+            .0
+            .count()
+            .cmp(&masks[a][0].0.count())
+            .then(a.cmp(&b))
+    });
+    let widest_cells = masks
+        .iter()
+        .map(|m| m[0].0.width.max(m[1].0.width))
+        .max()
+        .unwrap_or(0);
+    let all_in_a_row: usize = masks.iter().map(|m| m[0].0.width + gap).sum();
+    let layout = |(row_width, turns): (usize, u8)| {
         let mut free = Grid::new(row_width);
-        let mut offsets = vec![DVec2::ZERO; charts.len()];
+        let mut placed = vec![
+            Placement {
+                turns: 0,
+                offset: DVec2::ZERO
+            };
+            charts.len()
+        ];
         let mut corner = DVec2::ZERO;
         for &i in &order {
-            let (x, y) = free.lowest_fit(&grown[i]);
-            free.occupy(&masks[i], x + gap, y + gap);
+            // The lowest, then leftmost, spot over the turns that fit.
+            let (y, x, t) = (0..turns)
+                .filter(|&t| masks[i][t as usize].1.width <= row_width)
+                .map(|t| {
+                    let (x, y) = free.lowest_fit(&masks[i][t as usize].1);
+                    (y, x, t)
+                })
+                .min()
+                .expect("the row fits every chart unturned");
+            free.occupy(&masks[i][t as usize].0, x + gap, y + gap);
             // The mask's cell (0, 0) holds the chart's origin.
-            offsets[i] = DVec2::new((x + gap) as f64, (y + gap) as f64) * cell;
-            corner = corner.max(offsets[i] + sizes[i]);
+            let offset = DVec2::new((x + gap) as f64, (y + gap) as f64) * cell;
+            let size = if t % 2 == 0 {
+                sizes[i]
+            } else {
+                DVec2::new(sizes[i].y, sizes[i].x)
+            };
+            corner = corner.max(offset + size);
+            placed[i] = Placement { turns: t, offset };
         }
         // The first chart's margin from the layout's edge is not needed.
-        let lo = offsets.iter().fold(DVec2::INFINITY, |m, &o| m.min(o));
+        let lo = placed.iter().fold(DVec2::INFINITY, |m, p| m.min(p.offset));
         let corner = corner - lo;
-        let offsets = offsets.into_iter().map(|o| o - lo).collect();
-        (corner.x * corner.y, offsets)
+        for p in &mut placed {
+            p.offset -= lo;
+        }
+        (corner.x * corner.y, placed)
     };
     const WIDTHS: usize = 8;
     (0..=WIDTHS)
@@ -134,12 +182,52 @@ pub fn outlines(charts: &[(&[[u32; 3]], &[DVec2])]) -> Vec<DVec2> {
                     * (k as f64 / WIDTHS as f64).powi(2)) as usize
         })
         .chain([(box_area.sqrt() / cell) as usize + widest_cells / 2])
-        .map(|w| layout(w.max(widest_cells + 2 * gap)))
-        .fold(None, |best: Option<(f64, Vec<DVec2>)>, next| match best {
-            Some(b) if b.0 <= next.0 => Some(b),
-            _ => Some(next),
+        .map(|w| w.max(masks.iter().map(|m| m[0].1.width).max().unwrap_or(0)))
+        .flat_map(|w| [(w, 1), (w, TURNS)])
+        .map(layout)
+        .fold(
+            None,
+            |best: Option<(f64, Vec<Placement>)>, next| match best {
+                Some(b) if b.0 <= next.0 => Some(b),
+                _ => Some(next),
+            },
+        )
+        .map_or_else(Vec::new, |(_, placed)| placed)
+}
+
+/// Where `outlines` put a chart: turned by `turns` quarter turns
+/// (counter-clockwise, `turned`), then moved by `offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub turns: u8,
+    pub offset: DVec2,
+}
+
+impl Placement {
+    /// The chart's uvs (from the origin) where it was placed.
+    pub fn apply(&self, uv: &[DVec2]) -> Vec<DVec2> {
+        turned(uv, self.turns)
+            .into_iter()
+            .map(|u| u + self.offset)
+            .collect()
+    }
+}
+
+/// Quarter turns `outlines` tries.
+const TURNS: u8 = 4;
+
+/// Uvs from the origin turned by `turns` quarter turns counter-clockwise,
+/// still from the origin.
+fn turned(uv: &[DVec2], turns: u8) -> Vec<DVec2> {
+    let size = extent(uv);
+    uv.iter()
+        .map(|&u| match turns % 4 {
+            0 => u,
+            1 => DVec2::new(size.y - u.y, u.x),
+            2 => size - u,
+            _ => DVec2::new(u.y, size.x - u.x),
         })
-        .map_or_else(Vec::new, |(_, offsets)| offsets)
+        .collect()
 }
 
 /// Cells across the square of the charts' total box area (`outlines`).
@@ -426,11 +514,11 @@ mod tests {
         let (l_tris, l_uv) = squares(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)], 2.0);
         let (s_tris, s_uv) = squares(&[(0.0, 0.0)], 1.5);
         let charts = [(&l_tris[..], &l_uv[..]), (&s_tris[..], &s_uv[..])];
-        let offsets = outlines(&charts);
+        let placements = outlines(&charts);
         let placed: Vec<Vec<DVec2>> = charts
             .iter()
-            .zip(&offsets)
-            .map(|((_, uv), &o)| uv.iter().map(|&u| u + o).collect())
+            .zip(&placements)
+            .map(|((_, uv), p)| p.apply(uv))
             .collect();
         let (lo, hi) = metrics::bounds(placed.iter().flatten().copied());
         let packed = (hi - lo).x * (hi - lo).y;
@@ -443,15 +531,41 @@ mod tests {
             shelf_corner.x * shelf_corner.y
         );
         assert!((hi - lo).x < 4.5 && (hi - lo).y < 4.5, "{lo} {hi}");
-        // The square lies in the notch, off the L by at least the margin.
+        // The square lies in the L's box, off every L triangle by at least
+        // the margin: its box grown by the margin touches none of them
+        // (mapped so that box is the unit square; an affine map keeps
+        // what overlaps).
+        let (l_lo, l_hi) = metrics::bounds(placed[0].iter().copied());
         let (s_lo, s_hi) = metrics::bounds(placed[1].iter().copied());
-        let margin = shelf_margin(&sizes);
-        let l_lo = offsets[0];
         assert!(
-            s_lo.x >= l_lo.x + 2.0 + margin * 0.99 && s_lo.y >= l_lo.y + 2.0 + margin * 0.99,
-            "square at {s_lo}..{s_hi}, L from {l_lo}"
+            s_lo.cmpge(l_lo).all() && s_hi.cmple(l_hi).all(),
+            "{s_lo}..{s_hi} in {l_lo}..{l_hi}"
         );
-        assert!(s_hi.x <= l_lo.x + 4.0 + margin && s_hi.y <= l_lo.y + 4.0 + margin);
+        let m = 0.99 * shelf_margin(&[extent(&l_uv), extent(&s_uv)]);
+        let (g_lo, g_hi) = (s_lo - m, s_hi + m);
+        for t in &l_tris {
+            let p = t.map(|v| (placed[0][v as usize] - g_lo) / (g_hi - g_lo));
+            assert!(!touches(&p, DVec2::ZERO), "an L triangle within the margin");
+        }
+    }
+
+    #[test]
+    fn a_quarter_turn_keeps_a_chart_from_the_origin_and_its_orientation() {
+        let (tris, uv) = squares(&[(0.0, 0.0), (1.0, 0.0)], 1.0);
+        let area =
+            |uv: &[DVec2]| -> f64 { tris.iter().map(|t| metrics::face_double_area(t, uv)).sum() };
+        for turns in 0..4 {
+            let q = turned(&uv, turns);
+            let (lo, hi) = metrics::bounds(q.iter().copied());
+            assert!(lo.abs_diff_eq(DVec2::ZERO, 1e-12), "{turns}: {lo}");
+            let size = if turns % 2 == 0 {
+                DVec2::new(2.0, 1.0)
+            } else {
+                DVec2::new(1.0, 2.0)
+            };
+            assert!(hi.abs_diff_eq(size, 1e-12), "{turns}: {hi}");
+            assert!((area(&q) - area(&uv)).abs() < 1e-12, "{turns}: mirrored");
+        }
     }
 
     #[test]

@@ -90,7 +90,7 @@ pub fn overlapping_pairs(triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<[u32; 2]> 
 
 /// Whether two triangles share interior area (more than `eps` deep): no
 /// edge of either separates them (separating axis theorem).
-fn triangles_overlap(a: [DVec2; 3], b: [DVec2; 3], eps: f64) -> bool {
+pub(crate) fn triangles_overlap(a: [DVec2; 3], b: [DVec2; 3], eps: f64) -> bool {
     for tri in [a, b] {
         for i in 0..3 {
             let axis = (tri[(i + 1) % 3] - tri[i]).perp();

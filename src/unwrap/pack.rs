@@ -12,10 +12,13 @@
 //! Hand-written: the hull and the caliper loop are a few lines, and a
 //! geometry crate for them would be a large dependency.
 
+use std::f64::consts::FRAC_1_SQRT_2;
+
 use glam::DVec2;
 
 use super::metrics;
 use crate::mesh::TriMesh;
+use crate::raster;
 
 /// The upper-right corner of uvs that start at the origin.
 pub fn extent(uv: &[DVec2]) -> DVec2 {
@@ -67,16 +70,32 @@ pub fn shelves(sizes: &[DVec2]) -> Vec<DVec2> {
         }
         (corner.x * corner.y, offsets)
     };
-    const WIDTHS: usize = 16;
-    (0..=WIDTHS)
-        .map(|k| widest + (all_in_a_row - widest).max(0.0) * (k as f64 / WIDTHS as f64).powi(2))
-        .chain([total_area.sqrt().max(widest)])
-        .map(layout)
-        .fold(None, |best: Option<(f64, Vec<DVec2>)>, next| match best {
+    let widths = row_widths(
+        widest,
+        (all_in_a_row - widest).max(0.0),
+        total_area.sqrt().max(widest),
+        16,
+    );
+    smallest(widths.map(layout)).unwrap_or_default()
+}
+
+/// Row widths a packer tries: `steps` + 1 from `narrowest` to `narrowest +
+/// span`, closer together at the narrow end, then `square`.
+fn row_widths(narrowest: f64, span: f64, square: f64, steps: usize) -> impl Iterator<Item = f64> {
+    (0..=steps)
+        .map(move |k| narrowest + span * (k as f64 / steps as f64).powi(2))
+        .chain([square])
+}
+
+/// Of (box area, layout) pairs, the layout with the smallest box (the
+/// first of equals).
+fn smallest<T>(layouts: impl Iterator<Item = (f64, T)>) -> Option<T> {
+    layouts
+        .fold(None, |best: Option<(f64, T)>, next| match best {
             Some(b) if b.0 <= next.0 => Some(b),
             _ => Some(next),
         })
-        .map_or_else(Vec::new, |(_, offsets)| offsets)
+        .map(|(_, layout)| layout)
 }
 
 /// Charts (triangles and uvs from the origin) placed by their outlines,
@@ -173,26 +192,17 @@ pub fn outlines(charts: &[(&[[u32; 3]], &[DVec2])]) -> Vec<Placement> {
         }
         (corner.x * corner.y, placed)
     };
-    const WIDTHS: usize = 8;
-    (0..=WIDTHS)
-        .map(|k| {
-            widest_cells
-                + gap
-                + ((all_in_a_row.saturating_sub(widest_cells)) as f64
-                    * (k as f64 / WIDTHS as f64).powi(2)) as usize
-        })
-        .chain([(box_area.sqrt() / cell) as usize + widest_cells / 2])
-        .map(|w| w.max(masks.iter().map(|m| m[0].1.width).max().unwrap_or(0)))
-        .flat_map(|w| [(w, 1), (w, TURNS)])
-        .map(layout)
-        .fold(
-            None,
-            |best: Option<(f64, Vec<Placement>)>, next| match best {
-                Some(b) if b.0 <= next.0 => Some(b),
-                _ => Some(next),
-            },
-        )
-        .map_or_else(Vec::new, |(_, placed)| placed)
+    let fits_all = masks.iter().map(|m| m[0].1.width).max().unwrap_or(0);
+    let widths = row_widths(
+        (widest_cells + gap) as f64,
+        all_in_a_row.saturating_sub(widest_cells) as f64,
+        (box_area.sqrt() / cell).floor() + (widest_cells / 2) as f64,
+        8,
+    );
+    let tries = widths
+        .map(|w| (w as usize).max(fits_all))
+        .flat_map(|w| [(w, 1), (w, TURNS)]);
+    smallest(tries.map(layout)).unwrap_or_default()
 }
 
 /// Where `outlines` put a chart: turned by `turns` quarter turns
@@ -242,24 +252,16 @@ struct Mask {
 }
 
 impl Mask {
-    /// Every cell of side `cell` that a triangle touches (triangle and
-    /// square overlap: no separating axis among the square's two and the
-    /// triangle's three edge normals).
+    /// Every cell of side `cell` that a triangle touches: the rasteriser's
+    /// cells whose centre lies within half a diagonal of a triangle (a
+    /// superset: the distance it measures is never more than the true one).
     fn of(triangles: &[[u32; 3]], uv: &[DVec2], cell: f64) -> Mask {
         let size = extent(uv) / cell;
         let (width, height) = (size.x.ceil() as usize + 1, size.y.ceil() as usize + 1);
         let mut mask = Mask::empty(width, height);
         for t in triangles {
             let p = t.map(|v| uv[v as usize] / cell);
-            let lo = p[0].min(p[1]).min(p[2]).max(DVec2::ZERO);
-            let hi = p[0].max(p[1]).max(p[2]);
-            for y in lo.y.floor() as usize..=(hi.y.floor() as usize).min(height - 1) {
-                for x in lo.x.floor() as usize..=(hi.x.floor() as usize).min(width - 1) {
-                    if touches(&p, DVec2::new(x as f64, y as f64)) {
-                        mask.set(x, y);
-                    }
-                }
-            }
+            raster::triangle_padded(p, width, height, FRAC_1_SQRT_2, |x, y, _| mask.set(x, y));
         }
         mask
     }
@@ -299,35 +301,6 @@ impl Mask {
         }
         out
     }
-}
-
-/// Whether the triangle `p` and the unit square at `corner` overlap.
-fn touches(p: &[DVec2; 3], corner: DVec2) -> bool {
-    let square = [
-        corner,
-        corner + DVec2::X,
-        corner + DVec2::ONE,
-        corner + DVec2::Y,
-    ];
-    let separated = |axis: DVec2| {
-        let span = |q: &[DVec2]| {
-            q.iter()
-                .map(|v| v.dot(axis))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| {
-                    (a.min(d), b.max(d))
-                })
-        };
-        let (a, b) = (span(p), span(&square));
-        a.1 < b.0 || b.1 < a.0
-    };
-    let axes = [
-        DVec2::X,
-        DVec2::Y,
-        (p[1] - p[0]).perp(),
-        (p[2] - p[1]).perp(),
-        (p[0] - p[2]).perp(),
-    ];
-    !axes.iter().any(|&a| separated(a))
 }
 
 /// The occupied cells of a layout `width` cells wide, growing upwards.
@@ -381,7 +354,7 @@ impl Grid {
         while self.mask.rows.len() < y + m.rows.len() {
             self.mask.rows.push(vec![0; words]);
         }
-        for (dy, _) in m.rows.iter().enumerate() {
+        for dy in 0..m.rows.len() {
             for dx in (0..m.width).filter(|&dx| m.get(dx, dy)) {
                 if x + dx < self.mask.width {
                     self.mask.set(x + dx, y + dy);
@@ -462,6 +435,7 @@ fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::unwrap::overlap::triangles_overlap;
 
     #[test]
     fn a_turned_rectangle_is_turned_back_wider_than_tall() {
@@ -532,9 +506,7 @@ mod tests {
         );
         assert!((hi - lo).x < 4.5 && (hi - lo).y < 4.5, "{lo} {hi}");
         // The square lies in the L's box, off every L triangle by at least
-        // the margin: its box grown by the margin touches none of them
-        // (mapped so that box is the unit square; an affine map keeps
-        // what overlaps).
+        // the margin: its box grown by the margin overlaps none of them.
         let (l_lo, l_hi) = metrics::bounds(placed[0].iter().copied());
         let (s_lo, s_hi) = metrics::bounds(placed[1].iter().copied());
         assert!(
@@ -543,9 +515,20 @@ mod tests {
         );
         let m = 0.99 * shelf_margin(&[extent(&l_uv), extent(&s_uv)]);
         let (g_lo, g_hi) = (s_lo - m, s_hi + m);
+        let grown = [
+            g_lo,
+            DVec2::new(g_hi.x, g_lo.y),
+            g_hi,
+            DVec2::new(g_lo.x, g_hi.y),
+        ];
         for t in &l_tris {
-            let p = t.map(|v| (placed[0][v as usize] - g_lo) / (g_hi - g_lo));
-            assert!(!touches(&p, DVec2::ZERO), "an L triangle within the margin");
+            let p = t.map(|v| placed[0][v as usize]);
+            for half in [[0, 1, 2], [0, 2, 3]] {
+                assert!(
+                    !triangles_overlap(p, half.map(|k| grown[k]), 0.0),
+                    "an L triangle within the margin"
+                );
+            }
         }
     }
 

@@ -10,7 +10,9 @@
 //! are flattened again, until nothing overlaps (as xatlas and Blender split
 //! charts). Seamster's refinement has already cut where area stretch is
 //! worst, so flaps are few: small ones where a jagged facet border folds,
-//! a polyp's head where it spreads over the wall ring.
+//! a polyp's head where it spreads over the wall ring. Where a few rounds of
+//! this leave a fold, the layout is kept and cut into disks that do not
+//! overlap (`peel`), so a split layout never overlaps.
 
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
@@ -24,7 +26,7 @@ use crate::mesh::dsu::DisjointSets;
 use crate::mesh::graph::Nearest;
 use crate::mesh::repair::make_manifold_traced;
 use crate::mesh::submesh::extract;
-use crate::mesh::{Components, EdgeId, FaceId, Topology, TriMesh};
+use crate::mesh::{Components, EdgeId, FaceId, Topology, TriMesh, VertexId};
 
 /// Pairs of triangles (lower index first, sorted) whose uv triangles
 /// overlap with positive area. Triangles sharing a uv corner are never
@@ -159,13 +161,16 @@ fn flatten_part(
             method: flat.method.clone(),
         }]
     };
-    if rounds == 0 {
+    if drawn.is_empty() {
         return Ok(whole());
     }
     let mut pairs = overlapping_pairs(&chart.triangles, &flat.uv);
     pairs.retain(|&[f, g]| drawn[f as usize] && drawn[g as usize]);
     if pairs.is_empty() {
         return Ok(whole());
+    }
+    if rounds == 0 {
+        return Ok(peel(chart, &topo, &flat.uv, &flat.method, &pairs));
     }
     // One flap per pair of overlapping patches not already inside a flap,
     // flaps apart from each other: the rest is flattened again once for all
@@ -195,9 +200,8 @@ fn flatten_part(
     for faces in flaps.into_iter().chain([rest]) {
         match disks(chart, &faces) {
             Some(d) => parts.extend(d),
-            // Cutting here would not leave disks; keep the overlap (the uv
-            // metrics report it).
-            None => return Ok(whole()),
+            // Cutting here would not leave disks.
+            None => return Ok(peel(chart, &topo, &flat.uv, &flat.method, &pairs)),
         }
     }
     // The parts flatten independently; collected in order, so the result
@@ -217,6 +221,94 @@ fn flatten_part(
         })
         .collect::<Result<_>>()?;
     Ok(flattened.into_iter().flatten().collect())
+}
+
+/// The last resort, when re-flattening has not removed every overlap in
+/// `MAX_ROUNDS` or a flap would not leave disks: the layout `uv` as it is,
+/// cut into disks none of which holds both faces of an overlapping pair.
+/// Each disk grows from its lowest unclaimed face across edges, taking a
+/// face whose partners in `pairs` it does not hold, and which leaves it a
+/// disk: joined by one or two edges, and at each of the face's corners the
+/// disk's faces one unbroken run of the corner's fan (so no corner is
+/// pinched and no hole closes). The layout is locally injective, so the
+/// pairs are its only overlaps, and a bust scan's four leftover folds cost
+/// a few small charts and no distortion.
+fn peel(
+    chart: &TriMesh,
+    topo: &Topology,
+    uv: &[DVec2],
+    method: &Method,
+    pairs: &[[u32; 2]],
+) -> Vec<FlatChart> {
+    const NONE: u32 = u32::MAX;
+    let n = chart.num_faces();
+    let mut partners: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for &[f, g] in pairs {
+        partners[f as usize].push(g);
+        partners[g as usize].push(f);
+    }
+    let neighbours = |f: usize| {
+        topo.face_halfedges(FaceId::from(f))
+            .into_iter()
+            .filter_map(|h| topo.twin(h).map(|t| topo.face(t).idx()))
+    };
+    let mut region = vec![NONE; n];
+    // Whether the faces of `r`, with `f`, make one run round corner `v`.
+    let one_run = |region: &[u32], r: u32, f: usize, v: VertexId| {
+        let fan: Vec<bool> = topo
+            .outgoing(v)
+            .map(|h| {
+                let g = topo.face(h).idx();
+                g == f || region[g] == r
+            })
+            .collect();
+        let closed = !topo.is_boundary_vertex(v);
+        let starts = (0..fan.len())
+            .filter(|&i| {
+                let before = match i {
+                    0 if closed => fan[fan.len() - 1],
+                    0 => false,
+                    _ => fan[i - 1],
+                };
+                fan[i] && !before
+            })
+            .count();
+        starts <= 1
+    };
+    let mut charts = Vec::new();
+    for seed in 0..n {
+        if region[seed] != NONE {
+            continue;
+        }
+        let r = charts.len() as u32;
+        region[seed] = r;
+        let mut faces = vec![FaceId::from(seed)];
+        let mut queue: std::collections::VecDeque<usize> = neighbours(seed).collect();
+        while let Some(f) = queue.pop_front() {
+            if region[f] != NONE || partners[f].iter().any(|&g| region[g as usize] == r) {
+                continue;
+            }
+            let joined = neighbours(f).filter(|&g| region[g] == r).count();
+            let corners = chart.triangles[f].map(VertexId);
+            if !(1..=2).contains(&joined) || !corners.iter().all(|&v| one_run(&region, r, f, v)) {
+                continue;
+            }
+            region[f] = r;
+            faces.push(FaceId::from(f));
+            // A face turned away may fit once the disk has grown round it.
+            queue.extend(neighbours(f).filter(|&g| region[g] == NONE));
+        }
+        faces.sort_unstable();
+        let (part, origin) = extract(chart, &faces);
+        charts.push(FlatChart {
+            faces: faces.iter().map(|f| f.0).collect(),
+            uv: origin.iter().map(|&v| uv[v as usize]).collect(),
+            origin,
+            triangles: part.triangles,
+            method: method.clone(),
+        });
+    }
+    charts
 }
 
 /// The first of `pairs` for every two patches that overlap, a patch being
@@ -390,5 +482,101 @@ mod tests {
             .map(|(i, &p)| if i >= 4 { p + DVec2::new(1.0, 0.0) } else { p })
             .collect();
         assert!(overlapping_pairs(&tris, &apart).is_empty());
+    }
+
+    #[test]
+    fn peeling_a_strip_wound_over_itself_leaves_disks_that_do_not_overlap() {
+        // A flat strip of 40 x 3 quads (so with interior vertices) whose
+        // layout winds 1.25 times round a ring: its last quarter lies over
+        // its first.
+        let (quads, rows) = (40, 4);
+        let mut positions = Vec::new();
+        let mut uv = Vec::new();
+        for i in 0..=quads {
+            let angle = i as f64 / quads as f64 * 2.5 * std::f64::consts::PI;
+            let radial = DVec2::new(angle.cos(), angle.sin());
+            for side in 0..rows {
+                positions.push(glam::DVec3::new(i as f64, side as f64, 0.0));
+                uv.push(radial * (3.0 + side as f64));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..quads as u32 {
+            for side in 0..rows - 1 {
+                let a = rows * i + side;
+                let (b, c, d) = (a + 1, a + rows, a + rows + 1);
+                triangles.push([a, c, d]);
+                triangles.push([a, d, b]);
+            }
+        }
+        let chart = TriMesh::new(positions, triangles);
+        let topo = Topology::build(&chart).unwrap();
+        let pairs = overlapping_pairs(&chart.triangles, &uv);
+        assert!(!pairs.is_empty());
+        let method = Method::Lscm {
+            reason: String::new(),
+            unfolded: 0,
+            flipped: 0,
+        };
+        let parts = peel(&chart, &topo, &uv, &method, &pairs);
+        assert!((2..=3).contains(&parts.len()), "{} parts", parts.len());
+        let mut seen = vec![0; chart.num_faces()];
+        for part in &parts {
+            for &f in &part.faces {
+                seen[f as usize] += 1;
+            }
+            assert!(overlapping_pairs(&part.triangles, &part.uv).is_empty());
+        }
+        assert!(seen.iter().all(|&k| k == 1));
+        assert_disks(&chart, &parts);
+
+        // A face in the middle of a grid kept from the disk of the first:
+        // the disk must not close round it (a hole).
+        let n = 6u32;
+        let grid = TriMesh::new(
+            (0..=n)
+                .flat_map(|y| (0..=n).map(move |x| glam::DVec3::new(x as f64, y as f64, 0.0)))
+                .collect(),
+            (0..n)
+                .flat_map(|y| {
+                    (0..n).flat_map(move |x| {
+                        let a = y * (n + 1) + x;
+                        [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
+                    })
+                })
+                .collect(),
+        );
+        let flat: Vec<DVec2> = grid.positions.iter().map(|p| p.truncate()).collect();
+        let middle = 2 * (3 * n + 3);
+        let parts = peel(
+            &grid,
+            &Topology::build(&grid).unwrap(),
+            &flat,
+            &method,
+            &[[0, middle]],
+        );
+        assert!(parts.len() >= 2);
+        assert!(
+            !parts
+                .iter()
+                .any(|p| p.faces.contains(&0) && p.faces.contains(&middle))
+        );
+        assert_disks(&grid, &parts);
+    }
+
+    fn assert_disks(chart: &TriMesh, parts: &[FlatChart]) {
+        for part in parts {
+            let mesh = TriMesh::new(
+                part.origin
+                    .iter()
+                    .map(|&v| chart.positions[v as usize])
+                    .collect(),
+                part.triangles.clone(),
+            );
+            let topo = Topology::build(&mesh).unwrap();
+            let shapes = Components::find(&topo).topology(&topo);
+            assert_eq!(shapes.len(), 1);
+            assert_eq!((shapes[0].genus, shapes[0].boundary_loops), (0, 1));
+        }
     }
 }

@@ -11,6 +11,7 @@ use organtex::progress::{Progress, Silent};
 use organtex::scene::bake::{BakeOptions, BakeReport, bake};
 use organtex::scene::uterus::{self, CavityParams};
 use organtex::solid::section::{Plane, plane_section};
+use organtex::synth::block::Method;
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result};
 
@@ -689,11 +690,49 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
         "{err}"
     );
 
+    let (err, scene) =
+        bake_error(&base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"lapped\""));
+    assert!(
+        err.contains("unknown variant `lapped`, expected `fnpts` or `optimize`"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, "lapped"))),
+        "{err}"
+    );
+
     let (err, _) = bake_error(&base.replace("name = \"myoma-1\"", "name = \"myoma-7\""));
     assert!(
         err.contains("facet 'myoma-7' is not a facet of the mesh (it has: wall, myoma-1)"),
         "{err}"
     );
+}
+
+#[test]
+fn the_scene_chooses_how_its_interior_is_synthesised() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = small_scene(0.0, 10.0, [0.0, 0.0]);
+    let mut blocks = Vec::new();
+    for (k, method) in ["", "method = \"fnpts\"", "method = \"optimize\""]
+        .into_iter()
+        .enumerate()
+    {
+        let body = base.replace("block_size = 5.0", &format!("block_size = 5.0\n{method}"));
+        let scene = scene_file(dir.path(), &format!("s{k}.toml"), &body);
+        let out = dir.path().join(format!("out{k}"));
+        let baked = bake(&scene, &out, &BakeOptions::default(), &Silent).unwrap();
+        let interior = &baked.report.interiors[0];
+        let block = Volume::read_nrrd(&out.join(&interior.file)).unwrap();
+        for axis in 0..3 {
+            assert!(block.seam(axis) <= 1.15, "{method}: axis {axis}");
+        }
+        blocks.push((interior.method, block.voxels));
+    }
+    // FNPTS by default; the method named is the one run.
+    assert_eq!(blocks[0].0, Method::Fnpts);
+    assert_eq!(blocks[1], blocks[0]);
+    assert_eq!(blocks[2].0, Method::Optimize);
+    assert_ne!(blocks[2].1, blocks[0].1);
 }
 
 #[test]

@@ -19,6 +19,7 @@ use crate::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Rend
 use crate::scene::build::{BakedScene, Tissues, ensure_tissues};
 use crate::scene::draw::DrawList;
 use crate::solid::{Placement, Plane, interior_block, plane_section};
+use crate::synth::block::Method;
 use crate::synth::volume::Volume;
 
 /// How the viewer starts.
@@ -512,10 +513,11 @@ impl Viewer {
             .spec
             .nodes
             .iter()
-            .find_map(|n| n.interior.as_ref().map(|i| i.texture.clone()));
-        let Some(tissue) =
-            interior.or_else(|| self.selected.map(|f| doc.settings(f).texture.clone()))
-        else {
+            .find_map(|n| n.interior.as_ref().map(|i| (i.texture.clone(), i.method)));
+        let Some((tissue, method)) = interior.or_else(|| {
+            self.selected
+                .map(|f| (doc.settings(f).texture.clone(), Method::default()))
+        }) else {
             return;
         };
         let database = doc.spec.database.clone();
@@ -531,6 +533,7 @@ impl Viewer {
                 interior_block(
                     &db.output_path(&tissue, crate::db::Output::Colour),
                     32,
+                    method,
                     0,
                     p,
                 )

@@ -24,6 +24,7 @@ use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
 use crate::solid::interior_block;
+use crate::synth::block::Method;
 use crate::synth::volume::Volume;
 
 /// How a bake runs.
@@ -53,6 +54,7 @@ pub struct InteriorLine {
     pub node: String,
     /// The tissue it was synthesised from.
     pub texture: String,
+    pub method: Method,
     /// Relative to the bake's folder.
     pub file: PathBuf,
     pub voxels: usize,
@@ -296,7 +298,7 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<(Interio
                 node.name, interior.texture
             ))
         })?;
-        let mut volume = interior_block(colour, n, k as u64, progress)?;
+        let mut volume = interior_block(colour, n, interior.method, k as u64, progress)?;
         volume.spacing = interior.block_size / n as f64;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let mut stem = file_name(&node.name);
@@ -310,6 +312,7 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<(Interio
             InteriorLine {
                 node: node.name.clone(),
                 texture: interior.texture.clone(),
+                method: interior.method,
                 file,
                 voxels: n,
                 voxel_size: volume.spacing,

@@ -15,7 +15,7 @@ use toml::Spanned;
 
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
-use crate::synth::block::MAX_BLOCK;
+use crate::synth::block::{MAX_BLOCK, Method};
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,6 +110,10 @@ pub struct Interior {
     /// Mesh units covered by one block.
     #[serde(default = "default_block_size")]
     pub block_size: f64,
+    /// How the block is synthesised: "fnpts" (sharp; streaks on cuts
+    /// across x) or "optimize" (no streaks, softer).
+    #[serde(default)]
+    pub method: Method,
 }
 
 fn default_block_size() -> f64 {

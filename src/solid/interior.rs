@@ -7,14 +7,15 @@ use std::path::Path;
 
 use crate::error::Result;
 use crate::progress::Progress;
-use crate::synth::block::{BlockOptions, synthesize_block};
+use crate::synth::block::{BlockOptions, Method, synthesize_block};
 use crate::synth::exemplar::{Exemplar, read_image};
 use crate::synth::volume::Volume;
 
-/// A `size`^3 block from the colour texture at `colour`.
+/// A `size`^3 block from the colour texture at `colour`, by `method`.
 pub fn interior_block(
     colour: &Path,
     size: usize,
+    method: Method,
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<Volume> {
@@ -28,6 +29,7 @@ pub fn interior_block(
     let opts = BlockOptions {
         size,
         seed,
+        method,
         ..BlockOptions::default()
     };
     synthesize_block(&[exemplar], &opts, progress)

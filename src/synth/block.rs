@@ -40,8 +40,14 @@ use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
 use crate::rng;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which synthesis fills the block (scene files name it in lower case).
+/// FNPTS is sharp, but slices across x can show diagonal streaks (one
+/// exemplar coordinate per voxel keeps at most two planes coherent);
+/// optimize is isotropic but softer (seed 002, 4.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Method {
+    #[default]
     Fnpts,
     Optimize,
 }
@@ -73,7 +79,7 @@ impl Default for BlockOptions {
             levels: None,
             neighbourhood: 5,
             occurrence: 0.1,
-            method: Method::Fnpts,
+            method: Method::default(),
         }
     }
 }

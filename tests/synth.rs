@@ -10,7 +10,8 @@ use organtex::synth::exemplar::{Crop, Exemplar};
 use organtex::synth::fnpts::{SynthOptions, Synthesis, synthesize};
 use organtex::synth::height::{exemplar_height, synthesis_height};
 use organtex::synth::quality::{Rgb, measure, seam};
-use organtex::synth::vessels::vesselness;
+use organtex::synth::vessel_tree;
+use organtex::synth::vessels::{self, vesselness};
 
 fn source(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -210,4 +211,83 @@ fn the_same_seed_gives_the_same_bytes_on_one_or_two_threads() {
         other_seed.pixels, again.pixels,
         "different seeds give different textures"
     );
+}
+
+/// The overlay over white, as RGB.
+fn over_white(rgba: &[[u8; 4]]) -> Vec<[u8; 3]> {
+    rgba.iter()
+        .map(|p| {
+            let a = p[3] as f64 / 255.0;
+            [0, 1, 2].map(|k| (p[k] as f64 * a + 255.0 * (1.0 - a)).round() as u8)
+        })
+        .collect()
+}
+
+/// Connected groups of opaque pixels, 8-neighbours, wrapping around.
+fn vessel_pieces(rgba: &[[u8; 4]], w: usize, h: usize) -> usize {
+    let opaque: Vec<bool> = rgba.iter().map(|p| p[3] >= vessel_tree::OPAQUE).collect();
+    let mut seen = vec![false; w * h];
+    let mut pieces = 0;
+    for start in 0..w * h {
+        if !opaque[start] || seen[start] {
+            continue;
+        }
+        pieces += 1;
+        seen[start] = true;
+        let mut stack = vec![start];
+        while let Some(i) = stack.pop() {
+            let (x, y) = ((i % w) as i64, (i / w) as i64);
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let j = (y + dy).rem_euclid(h as i64) as usize * w
+                        + (x + dx).rem_euclid(w as i64) as usize;
+                    if opaque[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+    }
+    pieces
+}
+
+#[test]
+fn the_vessel_overlay_tiles_in_one_piece_per_tree_as_the_photograph_covers() {
+    // The database's fundus crop.
+    let ex = crop("retina.jpg", 560, 180, 640);
+    let (w, h) = (ex.width, ex.height);
+    let scales = [1.0, 1.6, 2.56, 3.84];
+    let photo = vessels::overlay(&ex, &vesselness(&ex, &scales));
+    let tiled = vessel_tree::tileable_overlay(&photo, w, h, 0);
+    let seam_of = |rgba: &[[u8; 4]]| {
+        seam(&Rgb {
+            width: w,
+            height: h,
+            pixels: &over_white(rgba),
+        })
+    };
+    // Vessels cross the tile's edges and continue across them (the
+    // photograph's stop short of its edges, where its vesselness is 0).
+    let after = seam_of(&tiled);
+    assert!(after <= 1.15, "the grown vessels do not tile ({after})");
+    let crossing = |rgba: &[[u8; 4]]| {
+        (0..w).any(|x| rgba[x][3] >= vessel_tree::OPAQUE)
+            && (0..h).any(|y| rgba[y * w][3] >= vessel_tree::OPAQUE)
+    };
+    assert!(crossing(&tiled));
+    assert!(!crossing(&photo));
+    // Whole vessels: one piece per root, where the photograph's vesselness
+    // breaks into many.
+    let roots = vessel_tree::TreeOptions::new(w, h, 0).roots;
+    let pieces = vessel_pieces(&tiled, w, h);
+    assert!((1..=roots).contains(&pieces), "{pieces} pieces");
+    // As much vessel as the photograph shows.
+    let cover = |rgba: &[[u8; 4]]| vessel_tree::coverage(rgba.iter().map(|p| p[3]));
+    let (c0, c1) = (cover(&photo), cover(&tiled));
+    assert!((c1 - c0).abs() <= 0.05 * c0, "coverage {c1} against {c0}");
+    // The photograph's vessel colour.
+    assert!(tiled.iter().all(|p| p[0] > p[1] && p[0] > p[2]));
+    assert_eq!(vessel_tree::tileable_overlay(&photo, w, h, 0), tiled);
+    assert_ne!(vessel_tree::tileable_overlay(&photo, w, h, 1), tiled);
 }

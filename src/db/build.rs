@@ -15,12 +15,12 @@ use crate::synth::exemplar::Exemplar;
 use crate::synth::fnpts::{SynthOptions, synthesize};
 use crate::synth::height::{exemplar_height, synthesis_height};
 use crate::synth::quality::{Quality, Rgb, measure};
-use crate::synth::{mask, vessels};
+use crate::synth::{mask, vessel_tree, vessels};
 
 /// Bump when a change to synthesis, height maps or overlays changes what
 /// `build` writes for the same entry: outputs built under another recipe
 /// are then rebuilt when a bake needs them.
-pub const RECIPE: u32 = 1;
+pub const RECIPE: u32 = 2;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Built {
@@ -165,7 +165,11 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
             .iter()
             .map(|s| (s * side).max(1.0))
             .collect();
-        let rgba = vessels::overlay(&ex, &vessels::vesselness(&ex, &scales));
+        // The photograph's vessels give the colour and coverage; a tree
+        // grown on a torus gives vessels that tile (`vessel_tree`).
+        let photo = vessels::overlay(&ex, &vessels::vesselness(&ex, &scales));
+        let seed = t.synthesis.as_ref().map_or(0, |p| p.seed);
+        let rgba = vessel_tree::tileable_overlay(&photo, ex.width, ex.height, seed);
         let raw = rgba.iter().flatten().copied().collect();
         let img =
             image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");

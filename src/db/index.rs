@@ -12,6 +12,9 @@
 //! mask = "masks/x.png"              # optional: white usable
 //! mask_rules = ["dark", "bright", "vessels"]              # optional
 //! outputs = ["colour", "height"]    # colour, height, overlay
+//!                                   # (overlay: a tileable vessel tree
+//!                                   # in the photo's vessel colour and
+//!                                   # coverage, `synth::vessel_tree`)
 //! [tissue.synthesis]                # for colour and height
 //! width = 512
 //! height = 512

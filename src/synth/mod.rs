@@ -9,5 +9,6 @@ pub mod fnpts;
 pub mod height;
 pub mod mask;
 pub mod quality;
+pub mod vessel_tree;
 pub mod vessels;
 pub mod volume;

@@ -1,0 +1,328 @@
+//! A tileable vessel overlay grown as a tree on a torus, in the colours and
+//! coverage of a photograph's vessels.
+//!
+//! A photograph's vessels cannot tile as they are (they end at its edges),
+//! and pixel-by-pixel resynthesis (FNPTS) breaks the large vessels into
+//! short pieces. So the network is grown instead, by space colonisation
+//! (Runions, Lane and Prusinkiewicz 2007): attraction points scattered over
+//! the image, each pulling the tree node nearest it; a pulled node grows a
+//! step towards the mean of its pulls, and points the tree reaches are
+//! removed. Distances wrap around both axes, so the tree, and the overlay
+//! drawn from it, tile. Widths follow Murray's law (a parent's cubed radius
+//! is the sum of its children's), then scale so the overlay covers as much
+//! of the image as the photograph's vessels cover of theirs.
+//!
+//! Hand-written: no maintained crate grows branching networks, and the
+//! growth is a few loops over points.
+
+use glam::DVec2;
+
+use crate::rng;
+
+/// Opacity at which a pixel counts as vessel (coverage figures).
+pub const OPAQUE: u8 = 128;
+
+/// How a tree is grown: lengths in pixels of a `width` x `height` image.
+#[derive(Clone, Debug)]
+pub struct TreeOptions {
+    pub width: usize,
+    pub height: usize,
+    pub seed: u64,
+    /// Trees growing from as many root points.
+    pub roots: usize,
+    /// Mean spacing of the attraction points, in steps.
+    pub spacing: f64,
+    /// Growth step.
+    pub step: f64,
+    /// A point pulls nodes no farther than this.
+    pub reach: f64,
+    /// Branches shorter than this many steps, from a fork to a tip, are
+    /// pruned.
+    pub twig: usize,
+}
+
+impl TreeOptions {
+    pub fn new(width: usize, height: usize, seed: u64) -> Self {
+        let side = width.min(height) as f64;
+        TreeOptions {
+            width,
+            height,
+            seed,
+            roots: 3,
+            spacing: 8.0,
+            step: side / 128.0,
+            reach: side / 6.0,
+            twig: 4,
+        }
+    }
+}
+
+/// A grown tree: nodes with their parents (roots have none) and radii
+/// relative to a leaf's (1).
+#[derive(Clone, Debug)]
+pub struct Tree {
+    pub position: Vec<DVec2>,
+    pub parent: Vec<Option<usize>>,
+    pub radius: Vec<f64>,
+}
+
+/// The shortest displacement from `a` to `b` on the torus.
+fn towards(a: DVec2, b: DVec2, size: DVec2) -> DVec2 {
+    let d = b - a;
+    d - (d / size).round() * size
+}
+
+fn random_point(seed: u64, key: &[u64], size: DVec2) -> DVec2 {
+    let unit = |k: u64| {
+        let mut full = key.to_vec();
+        full.push(k);
+        (rng::hash(seed, &full) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    DVec2::new(unit(0), unit(1)) * size
+}
+
+/// Grow a vessel tree by space colonisation on the torus.
+pub fn grow(opts: &TreeOptions) -> Tree {
+    let size = DVec2::new(opts.width as f64, opts.height as f64);
+    let count = (size.x * size.y / (opts.spacing * opts.step).powi(2)).ceil() as usize;
+    let mut points: Vec<DVec2> = (0..count as u64)
+        .map(|i| random_point(opts.seed, &[1, i], size))
+        .collect();
+    let mut position: Vec<DVec2> = (0..opts.roots.max(1) as u64)
+        .map(|i| random_point(opts.seed, &[2, i], size))
+        .collect();
+    let mut parent: Vec<Option<usize>> = vec![None; position.len()];
+    let mut grown: Vec<Vec<usize>> = vec![Vec::new(); position.len()];
+    let kill = 2.0 * opts.step;
+    // Each point's nearest node and its distance; new nodes can only come
+    // nearer, so each round compares the points with the new nodes alone.
+    let nearest_of = |p: DVec2, nodes: &[DVec2], from: usize| {
+        (from..nodes.len())
+            .map(|n| (n, towards(p, nodes[n], size).length()))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+    };
+    let mut nearest: Vec<(usize, f64)> = points
+        .iter()
+        .map(|&p| nearest_of(p, &position, 0).expect("a root"))
+        .collect();
+    // Each round grows the tree by a step or ends it; the cap only guards
+    // against a tree circling forever.
+    let rounds = 8 * ((size.x + size.y) / opts.step) as usize;
+    for _ in 0..rounds {
+        // Points the tree has reached go.
+        let mut k = 0;
+        while k < points.len() {
+            if nearest[k].1 < kill {
+                points.swap_remove(k);
+                nearest.swap_remove(k);
+            } else {
+                k += 1;
+            }
+        }
+        let mut pull = vec![DVec2::ZERO; position.len()];
+        let mut pulled = vec![false; position.len()];
+        for (&p, &(n, d)) in points.iter().zip(&nearest) {
+            if d < opts.reach {
+                pull[n] += towards(position[n], p, size) / d;
+                pulled[n] = true;
+            }
+        }
+        let from = position.len();
+        for n in 0..from {
+            // Pulls that cancel out (a point on each side) grow nothing,
+            // nor does a pull towards where the node has grown before.
+            if pulled[n] && pull[n].length() > 1e-3 {
+                let p = (position[n] + pull[n].normalize() * opts.step).rem_euclid(size);
+                if !grown[n]
+                    .iter()
+                    .any(|&c| towards(position[c], p, size).length() < 0.5 * opts.step)
+                {
+                    grown[n].push(position.len());
+                    grown.push(Vec::new());
+                    position.push(p);
+                    parent.push(Some(n));
+                }
+            }
+        }
+        if position.len() == from {
+            break;
+        }
+        for (k, &p) in points.iter().enumerate() {
+            if let Some(m) = nearest_of(p, &position, from)
+                && m.1 < nearest[k].1
+            {
+                nearest[k] = m;
+            }
+        }
+    }
+    let (position, parent) = prune_twigs(position, parent, opts.twig);
+    // Murray's law, leaves first (a node comes after its parent).
+    let mut cubed = vec![0.0f64; position.len()];
+    let mut children = vec![0usize; position.len()];
+    for p in parent.iter().flatten() {
+        children[*p] += 1;
+    }
+    for n in (0..position.len()).rev() {
+        if children[n] == 0 {
+            cubed[n] = 1.0;
+        }
+        if let Some(p) = parent[n] {
+            cubed[p] += cubed[n];
+        }
+    }
+    Tree {
+        position,
+        parent,
+        radius: cubed.iter().map(|c| c.cbrt()).collect(),
+    }
+}
+
+/// The tree without its twigs: branches of fewer than `twig` nodes from a
+/// fork to a tip, which space colonisation sprouts wherever a last point
+/// lies beside a vessel.
+fn prune_twigs(
+    position: Vec<DVec2>,
+    parent: Vec<Option<usize>>,
+    twig: usize,
+) -> (Vec<DVec2>, Vec<Option<usize>>) {
+    let mut children = vec![0usize; position.len()];
+    for p in parent.iter().flatten() {
+        children[*p] += 1;
+    }
+    let mut keep = vec![true; position.len()];
+    for leaf in (0..position.len()).filter(|&n| children[n] == 0) {
+        let mut chain = vec![leaf];
+        let mut n = leaf;
+        while let Some(p) = parent[n] {
+            if children[p] != 1 {
+                // A fork: the chain is a branch; drop it if short.
+                if chain.len() < twig {
+                    for &c in &chain {
+                        keep[c] = false;
+                    }
+                }
+                break;
+            }
+            chain.push(p);
+            n = p;
+        }
+    }
+    let mut index = vec![usize::MAX; position.len()];
+    let mut kept_position = Vec::new();
+    let mut kept_parent = Vec::new();
+    for n in (0..position.len()).filter(|&n| keep[n]) {
+        index[n] = kept_position.len();
+        kept_position.push(position[n]);
+        kept_parent.push(parent[n].map(|p| index[p]));
+    }
+    (kept_position, kept_parent)
+}
+
+/// Opacity of the tree drawn `width` x `height`, wrapping around, each
+/// segment a capsule of its child's radius times `scale` (pixels), edges
+/// antialiased over a pixel.
+pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64) -> Vec<f32> {
+    let size = DVec2::new(width as f64, height as f64);
+    let mut alpha = vec![0.0f32; width * height];
+    for (n, parent) in tree.parent.iter().enumerate() {
+        let Some(p) = *parent else { continue };
+        let a = tree.position[n];
+        let b = a + towards(a, tree.position[p], size);
+        let r = tree.radius[n] * scale;
+        let lo = (a.min(b) - r - 1.0).floor();
+        let hi = (a.max(b) + r + 1.0).ceil();
+        let ab = b - a;
+        for y in lo.y as i64..=hi.y as i64 {
+            for x in lo.x as i64..=hi.x as i64 {
+                let q = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                let t = ((q - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
+                let d = (q - (a + ab * t)).length();
+                let v = (r + 0.5 - d).clamp(0.0, 1.0) as f32;
+                if v > 0.0 {
+                    let i = y.rem_euclid(height as i64) as usize * width
+                        + x.rem_euclid(width as i64) as usize;
+                    alpha[i] = alpha[i].max(v);
+                }
+            }
+        }
+    }
+    alpha
+}
+
+/// Fraction of pixels at least `OPAQUE`.
+pub fn coverage(alpha: impl Iterator<Item = u8>) -> f64 {
+    let (mut opaque, mut all) = (0usize, 0usize);
+    for a in alpha {
+        opaque += (a >= OPAQUE) as usize;
+        all += 1;
+    }
+    opaque as f64 / all.max(1) as f64
+}
+
+/// A tileable overlay in the colours and coverage of `photo`, a vessel
+/// overlay (RGBA, vessels opaque) made from a photograph: its vessels'
+/// mean colour, its vessel coverage, drawn on a tree grown from `seed`.
+pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u64) -> Vec<[u8; 4]> {
+    let target = coverage(photo.iter().map(|p| p[3]));
+    let (mut sum, mut weight) = ([0.0f64; 3], 0.0f64);
+    for p in photo {
+        let w = p[3] as f64;
+        for k in 0..3 {
+            sum[k] += w * p[k] as f64;
+        }
+        weight += w;
+    }
+    let colour = sum.map(|s| (s / weight.max(1.0)).round() as u8);
+    let tree = grow(&TreeOptions::new(width, height, seed));
+    // Coverage grows about linearly with width: a few secant steps on the
+    // leaf radius find the photograph's.
+    let covered = |scale: f64| {
+        coverage(
+            draw(&tree, width, height, scale)
+                .iter()
+                .map(|&a| (a * 255.0).round() as u8),
+        )
+    };
+    let mut scale = 0.75;
+    for _ in 0..4 {
+        let c = covered(scale);
+        if target <= 0.0 || c <= 0.0 || ((c - target) / target).abs() < 0.02 {
+            break;
+        }
+        scale *= target / c;
+    }
+    draw(&tree, width, height, scale)
+        .iter()
+        .map(|&a| [colour[0], colour[1], colour[2], (a * 255.0).round() as u8])
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_grown_tree_is_connected_to_its_roots_and_wider_towards_them() {
+        let opts = TreeOptions::new(128, 128, 3);
+        let tree = grow(&opts);
+        assert!(tree.position.len() > 100, "{} nodes", tree.position.len());
+        for (n, p) in tree.parent.iter().enumerate() {
+            if let Some(p) = *p {
+                assert!(p < n);
+                assert!(tree.radius[p] >= tree.radius[n]);
+                let size = DVec2::splat(128.0);
+                let step = towards(tree.position[p], tree.position[n], size).length();
+                assert!((step - opts.step).abs() < 1e-9, "{step}");
+            }
+        }
+        // Murray: the roots carry every leaf's cubed radius.
+        let leaves = (0..tree.position.len())
+            .filter(|&n| !tree.parent.contains(&Some(n)))
+            .count();
+        let roots: f64 = (0..tree.position.len())
+            .filter(|&n| tree.parent[n].is_none())
+            .map(|n| tree.radius[n].powi(3))
+            .sum();
+        assert!((roots - leaves as f64).abs() < 1e-6 * leaves as f64);
+    }
+}

@@ -225,7 +225,10 @@ fn over_white(rgba: &[[u8; 4]]) -> Vec<[u8; 3]> {
 
 /// Connected groups of opaque pixels, 8-neighbours, wrapping around.
 fn vessel_pieces(rgba: &[[u8; 4]], w: usize, h: usize) -> usize {
-    let opaque: Vec<bool> = rgba.iter().map(|p| p[3] >= vessel_tree::OPAQUE).collect();
+    let opaque: Vec<bool> = rgba
+        .iter()
+        .map(|p| p[3] >= vessel_tree::VESSEL_ALPHA)
+        .collect();
     let mut seen = vec![false; w * h];
     let mut pieces = 0;
     for start in 0..w * h {
@@ -253,7 +256,7 @@ fn vessel_pieces(rgba: &[[u8; 4]], w: usize, h: usize) -> usize {
 }
 
 #[test]
-fn the_vessel_overlay_tiles_in_one_piece_per_tree_as_the_photograph_covers() {
+fn the_vessel_overlay_tiles_in_at_most_one_piece_per_tree_as_the_photograph_covers() {
     // The database's fundus crop.
     let ex = crop("retina.jpg", 560, 180, 640);
     let (w, h) = (ex.width, ex.height);
@@ -272,13 +275,13 @@ fn the_vessel_overlay_tiles_in_one_piece_per_tree_as_the_photograph_covers() {
     let after = seam_of(&tiled);
     assert!(after <= 1.15, "the grown vessels do not tile ({after})");
     let crossing = |rgba: &[[u8; 4]]| {
-        (0..w).any(|x| rgba[x][3] >= vessel_tree::OPAQUE)
-            && (0..h).any(|y| rgba[y * w][3] >= vessel_tree::OPAQUE)
+        (0..w).any(|x| rgba[x][3] >= vessel_tree::VESSEL_ALPHA)
+            && (0..h).any(|y| rgba[y * w][3] >= vessel_tree::VESSEL_ALPHA)
     };
     assert!(crossing(&tiled));
     assert!(!crossing(&photo));
-    // Whole vessels: one piece per root, where the photograph's vesselness
-    // breaks into many.
+    // Whole vessels: at most a piece per root (trees may meet), where the
+    // photograph's vesselness breaks into many.
     let roots = vessel_tree::TreeOptions::new(w, h, 0).roots;
     let pieces = vessel_pieces(&tiled, w, h);
     assert!((1..=roots).contains(&pieces), "{pieces} pieces");
@@ -286,8 +289,15 @@ fn the_vessel_overlay_tiles_in_one_piece_per_tree_as_the_photograph_covers() {
     let cover = |rgba: &[[u8; 4]]| vessel_tree::coverage(rgba.iter().map(|p| p[3]));
     let (c0, c1) = (cover(&photo), cover(&tiled));
     assert!((c1 - c0).abs() <= 0.05 * c0, "coverage {c1} against {c0}");
-    // The photograph's vessel colour.
-    assert!(tiled.iter().all(|p| p[0] > p[1] && p[0] > p[2]));
+    // The colour of the photograph's vessels.
+    let opaque: Vec<&[u8; 4]> = photo
+        .iter()
+        .filter(|p| p[3] >= vessel_tree::VESSEL_ALPHA)
+        .collect();
+    let mean = |k: usize| opaque.iter().map(|p| p[k] as f64).sum::<f64>() / opaque.len() as f64;
+    for (k, &c) in tiled[0][..3].iter().enumerate() {
+        assert!((c as f64 - mean(k)).abs() <= 20.0, "channel {k}");
+    }
     assert_eq!(vessel_tree::tileable_overlay(&photo, w, h, 0), tiled);
     assert_ne!(vessel_tree::tileable_overlay(&photo, w, h, 1), tiled);
 }

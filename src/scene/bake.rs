@@ -54,6 +54,7 @@ pub struct InteriorLine {
     pub node: String,
     /// The tissue it was synthesised from.
     pub texture: String,
+    /// How the block was synthesised.
     pub method: Method,
     /// Relative to the bake's folder.
     pub file: PathBuf,

@@ -1,4 +1,4 @@
-//! A tileable vessel overlay grown as a tree on a torus, in the colours and
+//! A tileable vessel overlay grown as a tree on a torus, in the colour and
 //! coverage of a photograph's vessels.
 //!
 //! A photograph's vessels cannot tile as they are (they end at its edges),
@@ -19,8 +19,8 @@ use glam::DVec2;
 
 use crate::rng;
 
-/// Opacity at which a pixel counts as vessel (coverage figures).
-pub const OPAQUE: u8 = 128;
+/// Alpha from which an overlay pixel counts as vessel (coverage figures).
+pub const VESSEL_ALPHA: u8 = 128;
 
 /// How a tree is grown: lengths in pixels of a `width` x `height` image.
 #[derive(Clone, Debug)]
@@ -30,7 +30,7 @@ pub struct TreeOptions {
     pub seed: u64,
     /// Trees growing from as many root points.
     pub roots: usize,
-    /// Mean spacing of the attraction points, in steps.
+    /// Mean spacing of the attraction points, in steps (at least 1).
     pub spacing: f64,
     /// Growth step.
     pub step: f64,
@@ -43,7 +43,9 @@ pub struct TreeOptions {
 
 impl TreeOptions {
     pub fn new(width: usize, height: usize, seed: u64) -> Self {
-        let side = width.min(height) as f64;
+        // Lengths follow the image's scale (its geometric mean side), a step
+        // at least a pixel, so a thin image does not get a dense cloud.
+        let side = ((width * height) as f64).sqrt().max(128.0);
         TreeOptions {
             width,
             height,
@@ -84,7 +86,9 @@ fn random_point(seed: u64, key: &[u64], size: DVec2) -> DVec2 {
 /// Grow a vessel tree by space colonisation on the torus.
 pub fn grow(opts: &TreeOptions) -> Tree {
     let size = DVec2::new(opts.width as f64, opts.height as f64);
-    let count = (size.x * size.y / (opts.spacing * opts.step).powi(2)).ceil() as usize;
+    // At most a point per pixel.
+    let count = ((size.x * size.y / (opts.spacing.max(1.0) * opts.step).powi(2)).ceil() as usize)
+        .min(opts.width * opts.height);
     let mut points: Vec<DVec2> = (0..count as u64)
         .map(|i| random_point(opts.seed, &[1, i], size))
         .collect();
@@ -92,7 +96,7 @@ pub fn grow(opts: &TreeOptions) -> Tree {
         .map(|i| random_point(opts.seed, &[2, i], size))
         .collect();
     let mut parent: Vec<Option<usize>> = vec![None; position.len()];
-    let mut grown: Vec<Vec<usize>> = vec![Vec::new(); position.len()];
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); position.len()];
     let kill = 2.0 * opts.step;
     // Each point's nearest node and its distance; new nodes can only come
     // nearer, so each round compares the points with the new nodes alone.
@@ -133,12 +137,12 @@ pub fn grow(opts: &TreeOptions) -> Tree {
             // nor does a pull towards where the node has grown before.
             if pulled[n] && pull[n].length() > 1e-3 {
                 let p = (position[n] + pull[n].normalize() * opts.step).rem_euclid(size);
-                if !grown[n]
+                if !children[n]
                     .iter()
                     .any(|&c| towards(position[c], p, size).length() < 0.5 * opts.step)
                 {
-                    grown[n].push(position.len());
-                    grown.push(Vec::new());
+                    children[n].push(position.len());
+                    children.push(Vec::new());
                     position.push(p);
                     parent.push(Some(n));
                 }
@@ -159,12 +163,12 @@ pub fn grow(opts: &TreeOptions) -> Tree {
     smooth(&mut position, &parent, size, 4);
     // Murray's law, leaves first (a node comes after its parent).
     let mut cubed = vec![0.0f64; position.len()];
-    let mut children = vec![0usize; position.len()];
+    let mut child_count = vec![0usize; position.len()];
     for p in parent.iter().flatten() {
-        children[*p] += 1;
+        child_count[*p] += 1;
     }
     for n in (0..position.len()).rev() {
-        if children[n] == 0 {
+        if child_count[n] == 0 {
             cubed[n] = 1.0;
         }
         if let Some(p) = parent[n] {
@@ -279,11 +283,11 @@ pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64) -> Vec<f32> {
     alpha
 }
 
-/// Fraction of pixels at least `OPAQUE`.
+/// Fraction of pixels at least `VESSEL_ALPHA`.
 pub fn coverage(alpha: impl Iterator<Item = u8>) -> f64 {
     let (mut opaque, mut all) = (0usize, 0usize);
     for a in alpha {
-        opaque += (a >= OPAQUE) as usize;
+        opaque += (a >= VESSEL_ALPHA) as usize;
         all += 1;
     }
     opaque as f64 / all.max(1) as f64
@@ -292,6 +296,7 @@ pub fn coverage(alpha: impl Iterator<Item = u8>) -> f64 {
 /// A tileable overlay in the colours and coverage of `photo`, a vessel
 /// overlay (RGBA, vessels opaque) made from a photograph: its vessels'
 /// mean colour, its vessel coverage, drawn on a tree grown from `seed`.
+/// A photograph without vessels gives a transparent overlay.
 pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u64) -> Vec<[u8; 4]> {
     let target = coverage(photo.iter().map(|p| p[3]));
     let (mut sum, mut weight) = ([0.0f64; 3], 0.0f64);
@@ -303,9 +308,13 @@ pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u6
         weight += w;
     }
     let colour = sum.map(|s| (s / weight.max(1.0)).round() as u8);
+    if target <= 0.0 || width == 0 || height == 0 {
+        return vec![[colour[0], colour[1], colour[2], 0]; width * height];
+    }
     let tree = grow(&TreeOptions::new(width, height, seed));
-    // Coverage grows about linearly with width: a few secant steps on the
-    // leaf radius find the photograph's.
+    // Coverage grows with the width (about linearly, plus the antialiased
+    // edge): the leaf radius rescaled in proportion a few times finds the
+    // photograph's.
     let covered = |scale: f64| {
         coverage(
             draw(&tree, width, height, scale)
@@ -316,7 +325,7 @@ pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u6
     let mut scale = 0.75;
     for _ in 0..4 {
         let c = covered(scale);
-        if target <= 0.0 || c <= 0.0 || ((c - target) / target).abs() < 0.02 {
+        if c <= 0.0 || ((c - target) / target).abs() < 0.02 {
             break;
         }
         scale *= target / c;
@@ -332,28 +341,37 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_grown_tree_is_made_of_short_segments_and_wider_towards_its_roots() {
+    fn a_grown_tree_reaches_all_over_the_tile_in_short_segments() {
         let opts = TreeOptions::new(128, 128, 3);
+        let size = DVec2::splat(128.0);
         let tree = grow(&opts);
         assert!(tree.position.len() > 100, "{} nodes", tree.position.len());
         for (n, p) in tree.parent.iter().enumerate() {
             if let Some(p) = *p {
-                assert!(p < n);
-                assert!(tree.radius[p] >= tree.radius[n]);
                 // Short segments, none jumping across the tile.
-                let size = DVec2::splat(128.0);
                 let step = towards(tree.position[p], tree.position[n], size).length();
                 assert!(step > 0.0 && step <= 1.5 * opts.step, "{step}");
             }
         }
-        // Murray: the roots carry every leaf's cubed radius.
-        let leaves = (0..tree.position.len())
-            .filter(|&n| !tree.parent.contains(&Some(n)))
-            .count();
-        let roots: f64 = (0..tree.position.len())
-            .filter(|&n| tree.parent[n].is_none())
-            .map(|n| tree.radius[n].powi(3))
-            .sum();
-        assert!((roots - leaves as f64).abs() < 1e-6 * leaves as f64);
+        // No bare patch: every pixel within a point's reach of the tree,
+        // across the tile's edges too.
+        let farthest = (0..128 * 128)
+            .map(|i| {
+                let q = DVec2::new((i % 128) as f64 + 0.5, (i / 128) as f64 + 0.5);
+                tree.position
+                    .iter()
+                    .map(|&p| towards(q, p, size).length())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        assert!(farthest <= opts.reach, "{farthest} > {}", opts.reach);
+    }
+
+    #[test]
+    fn a_photograph_without_vessels_gives_a_transparent_overlay() {
+        let photo = vec![[200, 90, 80, 0]; 64 * 64];
+        let overlay = tileable_overlay(&photo, 64, 64, 0);
+        assert_eq!(overlay.len(), 64 * 64);
+        assert!(overlay.iter().all(|p| p[3] == 0));
     }
 }

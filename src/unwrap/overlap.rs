@@ -12,7 +12,8 @@
 //! worst, so flaps are few: small ones where a jagged facet border folds,
 //! a polyp's head where it spreads over the wall ring. Where a few rounds of
 //! this leave a fold, the layout is kept and cut into disks that do not
-//! overlap (`peel`), so a split layout never overlaps.
+//! overlap (`peel`), so no two faces of a split layout overlap (a flipped
+//! face aside, which the flattening avoids and reports).
 
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
@@ -230,9 +231,10 @@ fn flatten_part(
 /// face whose partners in `pairs` it does not hold, and which leaves it a
 /// disk: joined by one or two edges, and at each of the face's corners the
 /// disk's faces one unbroken run of the corner's fan (so no corner is
-/// pinched and no hole closes). The layout is locally injective, so the
-/// pairs are its only overlaps, and a bust scan's four leftover folds cost
-/// a few small charts and no distortion.
+/// pinched and no hole closes). Without flipped faces the layout is
+/// locally injective, so the pairs are its only overlaps; a bust scan's
+/// four leftover folds cost a few small charts and no distortion. Each
+/// disk repeats the layout's `method`.
 fn peel(
     chart: &TriMesh,
     topo: &Topology,

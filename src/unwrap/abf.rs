@@ -163,7 +163,7 @@ const SETTLED: f64 = 1e-3;
 /// Flatten a disk-shaped chart's angles: ABF++ to convergence or the
 /// step cap.
 pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSolution> {
-    solve_until(mesh, topo, opts, &mut |_| None)
+    solve_until(mesh, topo, opts, &mut |_| None::<(f64, ())>).map(|(solution, _)| solution)
 }
 
 /// ABF++, stopping early once more steps would not improve the layout. On
@@ -174,18 +174,22 @@ pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSo
 /// on parts of that bust split for an atlas it grows worse, 1.045 at the
 /// first stall and 1.058 at the cap). So whenever the best residual has
 /// not halved in `STALL_WINDOW` steps, `score` judges the best iterate:
-/// the caller lays it out and returns its distortion, lower better, or
-/// `None` when it cannot be used (some iterates of such a run cannot be
-/// laid out, or fold). Once a stall improves on the best score so far by
-/// no more than `SETTLED`, the run ends with the best-scored iterate,
-/// reported as not converged; so it does at the step cap when a stall
-/// scored one.
-pub fn solve_until(
+/// the caller lays it out and returns its distortion, lower better, with
+/// the layout, or `None` when it cannot be used (some iterates of such a
+/// run cannot be laid out, or fold). Once a stall improves on the best
+/// score so far by no more than `SETTLED`, the run ends with the
+/// best-scored iterate, reported as not converged, and the layout its
+/// score came with (so the caller does not lay it out again); so it does
+/// at the step cap when a stall scored one.
+pub fn solve_until<T, F>(
     mesh: &TriMesh,
     topo: &Topology,
     opts: &AbfOptions,
-    score: &mut dyn FnMut(&[[f64; 3]]) -> Option<f64>,
-) -> Result<AbfSolution> {
+    score: &mut F,
+) -> Result<(AbfSolution, Option<T>)>
+where
+    F: FnMut(&[[f64; 3]]) -> Option<(f64, T)>,
+{
     let tris = &mesh.triangles;
     let rows = Rows::new(topo);
     let theta = corner_angles(mesh);
@@ -251,10 +255,10 @@ pub fn solve_until(
     // of such angles is still far more conformal than a fallback's.
     let mut best = (residual, state.alpha.clone());
     // Best residual after each step, the step of the last stall, and the
-    // best-scored iterate (score, residual, angles).
+    // best-scored iterate (score, residual, angles, layout).
     let mut best_after = vec![residual];
     let mut stalled_at = 0;
-    let mut kept: Option<(f64, f64, Vec<[f64; 3]>)> = None;
+    let mut kept: Option<(f64, f64, Vec<[f64; 3]>, T)> = None;
     while residual > opts.tolerance {
         let capped = iterations == opts.max_iterations;
         let stalled = iterations >= stalled_at + STALL_WINDOW
@@ -262,33 +266,35 @@ pub fn solve_until(
         if stalled || (capped && kept.is_some()) {
             stalled_at = iterations;
             let previous = kept.as_ref().map(|k| k.0);
-            if let Some(now) = score(&best.1)
+            if let Some((now, laid)) = score(&best.1)
                 && previous.is_none_or(|p| now < p)
             {
-                kept = Some((now, best.0, best.1.clone()));
+                kept = Some((now, best.0, best.1.clone(), laid));
             }
             // Ends when the layout no longer improves by more than SETTLED
             // (an unusable one is no improvement), or at the cap.
             let settled =
                 previous.is_some_and(|p| kept.as_ref().is_some_and(|k| k.0 >= p - SETTLED));
             if (settled || capped)
-                && let Some((_, residual, angles)) = kept.take()
+                && let Some((_, residual, angles, laid)) = kept.take()
             {
-                return Ok(AbfSolution {
+                let solution = AbfSolution {
                     angles,
                     iterations,
                     residual,
                     converged: false,
-                });
+                };
+                return Ok((solution, Some(laid)));
             }
         }
         if capped {
-            return Ok(AbfSolution {
+            let solution = AbfSolution {
                 angles: best.1,
                 iterations,
                 residual: best.0,
                 converged: false,
-            });
+            };
+            return Ok((solution, None));
         }
         iterations += 1;
         let step = problem.newton_step(&state, pattern.as_ref(), &mut values)?;
@@ -321,12 +327,13 @@ pub fn solve_until(
         }
         best_after.push(best.0);
     }
-    Ok(AbfSolution {
+    let solution = AbfSolution {
         angles: state.alpha,
         iterations,
         residual,
         converged: true,
-    })
+    };
+    Ok((solution, None))
 }
 
 /// What eliminating one face's angles and triangle constraint leaves
@@ -605,9 +612,9 @@ mod tests {
         // the number of the stall.
         let run = |scores: &dyn Fn(usize) -> Option<f64>| {
             let mut seen: Vec<Vec<[f64; 3]>> = Vec::new();
-            let solution = solve_until(&chart, &topo, &opts, &mut |angles| {
+            let (solution, _) = solve_until(&chart, &topo, &opts, &mut |angles| {
                 seen.push(angles.to_vec());
-                scores(seen.len() - 1)
+                scores(seen.len() - 1).map(|s| (s, ()))
             })
             .unwrap();
             assert!(!solution.converged);

@@ -96,14 +96,18 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0))
     };
     // A stalled ABF++ iterate is scored by its layout's conformality, when
-    // that has no flips left after unfolding.
+    // that has no flips left after unfolding; the layout of the one kept
+    // comes back with it.
     let mut score = |angles: &[[f64; 3]]| {
-        let (uv, _, left) = unfold(layout::from_angles(chart, topo, angles).ok()?);
-        (left == 0).then(|| conf_mean(chart, &uv))
+        let (uv, unfolded, left) = unfold(layout::from_angles(chart, topo, angles).ok()?);
+        (left == 0).then(|| (conf_mean(chart, &uv), (uv, unfolded, left)))
     };
-    let solved = abf::solve_until(chart, topo, opts, &mut score).and_then(|solution| {
-        let uv = layout::from_angles(chart, topo, &solution.angles)?;
-        Ok((solution, uv))
+    let solved = abf::solve_until(chart, topo, opts, &mut score).and_then(|(solution, laid)| {
+        let laid = match laid {
+            Some(laid) => laid,
+            None => unfold(layout::from_angles(chart, topo, &solution.angles)?),
+        };
+        Ok((solution, laid))
     });
     let abf_method = |solution: &abf::AbfSolution, unfolded, balance_rounds| Method::AbfPlusPlus {
         iterations: solution.iterations,
@@ -116,7 +120,7 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
     // first flattening's.
     let mut unconverged = None;
     let reason = match solved {
-        Ok((solution, uv)) => match unfold(uv) {
+        Ok((solution, laid)) => match laid {
             (uv, unfolded, 0) if solution.converged => {
                 let (uv, balance_rounds) = balanced(uv);
                 return Ok(Flattened {

@@ -162,11 +162,8 @@ pub fn grow(opts: &TreeOptions) -> Tree {
     let (mut position, parent) = prune_twigs(position, parent, opts.twig);
     smooth(&mut position, &parent, size, 4);
     // Murray's law, leaves first (a node comes after its parent).
+    let (child_count, _) = child_counts(&parent);
     let mut cubed = vec![0.0f64; position.len()];
-    let mut child_count = vec![0usize; position.len()];
-    for p in parent.iter().flatten() {
-        child_count[*p] += 1;
-    }
     for n in (0..position.len()).rev() {
         if child_count[n] == 0 {
             cubed[n] = 1.0;
@@ -182,6 +179,20 @@ pub fn grow(opts: &TreeOptions) -> Tree {
     }
 }
 
+/// Per node, how many children it has, and its last child (its only one
+/// where it has one).
+fn child_counts(parent: &[Option<usize>]) -> (Vec<usize>, Vec<usize>) {
+    let mut count = vec![0usize; parent.len()];
+    let mut last = vec![0usize; parent.len()];
+    for (n, p) in parent.iter().enumerate() {
+        if let Some(p) = *p {
+            count[p] += 1;
+            last[p] = n;
+        }
+    }
+    (count, last)
+}
+
 /// The tree without its twigs: branches of fewer than `twig` nodes from a
 /// fork to a tip, which space colonisation sprouts wherever a last point
 /// lies beside a vessel.
@@ -190,10 +201,7 @@ fn prune_twigs(
     parent: Vec<Option<usize>>,
     twig: usize,
 ) -> (Vec<DVec2>, Vec<Option<usize>>) {
-    let mut children = vec![0usize; position.len()];
-    for p in parent.iter().flatten() {
-        children[*p] += 1;
-    }
+    let (children, _) = child_counts(&parent);
     let mut keep = vec![true; position.len()];
     for leaf in (0..position.len()).filter(|&n| children[n] == 0) {
         let mut chain = vec![leaf];
@@ -228,14 +236,7 @@ fn prune_twigs(
 /// forks and roots stay), so vessels run in curves rather than the
 /// growth's straight steps.
 fn smooth(position: &mut [DVec2], parent: &[Option<usize>], size: DVec2, rounds: usize) {
-    let mut children = vec![0usize; position.len()];
-    let mut child = vec![0usize; position.len()];
-    for (n, p) in parent.iter().enumerate() {
-        if let Some(p) = *p {
-            children[p] += 1;
-            child[p] = n;
-        }
-    }
+    let (children, child) = child_counts(parent);
     for _ in 0..rounds {
         let moved: Vec<DVec2> = (0..position.len())
             .map(|n| match parent[n] {
@@ -315,24 +316,25 @@ pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u6
     // Coverage grows with the width (about linearly, plus the antialiased
     // edge): the leaf radius rescaled in proportion a few times finds the
     // photograph's.
-    let covered = |scale: f64| {
-        coverage(
-            draw(&tree, width, height, scale)
-                .iter()
-                .map(|&a| (a * 255.0).round() as u8),
-        )
+    let drawn = |scale: f64| -> Vec<u8> {
+        draw(&tree, width, height, scale)
+            .iter()
+            .map(|&a| (a * 255.0).round() as u8)
+            .collect()
     };
     let mut scale = 0.75;
+    let mut alpha = drawn(scale);
     for _ in 0..4 {
-        let c = covered(scale);
+        let c = coverage(alpha.iter().copied());
         if c <= 0.0 || ((c - target) / target).abs() < 0.02 {
             break;
         }
         scale *= target / c;
+        alpha = drawn(scale);
     }
-    draw(&tree, width, height, scale)
-        .iter()
-        .map(|&a| [colour[0], colour[1], colour[2], (a * 255.0).round() as u8])
+    alpha
+        .into_iter()
+        .map(|a| [colour[0], colour[1], colour[2], a])
         .collect()
 }
 

@@ -627,18 +627,25 @@ fn line_of((_, text): &(PathBuf, String), needle: &str) -> usize {
         + 1
 }
 
+/// The scene `body` is refused with an error that says `message` and
+/// names the line holding `needle`.
+fn assert_error_at(body: &str, message: &str, needle: &str) {
+    let (err, scene) = bake_error(body);
+    assert!(err.contains(message), "{err}");
+    assert!(
+        err.contains(&format!("line {}", line_of(&scene, needle))),
+        "{err}"
+    );
+}
+
 #[test]
 fn bad_scenes_get_errors_naming_the_key_and_line() {
     let base = small_scene(0.0, 10.0, [0.0, 0.0]);
 
-    let (err, scene) = bake_error(&base.replace("\"ihc-glands\"", "\"liver-capsule\""));
-    assert!(
-        err.contains("facet 'myoma-1' texture: 'liver-capsule' is not in the tissue database"),
-        "{err}"
-    );
-    assert!(
-        err.contains(&format!("line {}", line_of(&scene, "liver-capsule"))),
-        "{err}"
+    assert_error_at(
+        &base.replace("\"ihc-glands\"", "\"liver-capsule\""),
+        "facet 'myoma-1' texture: 'liver-capsule' is not in the tissue database",
+        "liver-capsule",
     );
 
     let missing_mesh = "[[node]]\nname = \"organ\"\nmesh = { file = \"liver.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
@@ -660,45 +667,31 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
     );
     assert!(err.contains(&scene.0.display().to_string()), "{err}");
 
-    let (err, scene) = bake_error(&base.replace("overlap = 2.0", "overlap = -1.0"));
-    assert!(
-        err.contains("facet 'myoma-1' overlap: must be 0 or more, not -1"),
-        "{err}"
-    );
-    assert!(
-        err.contains(&format!("line {}", line_of(&scene, "overlap = -1.0"))),
-        "{err}"
+    assert_error_at(
+        &base.replace("overlap = 2.0", "overlap = -1.0"),
+        "facet 'myoma-1' overlap: must be 0 or more, not -1",
+        "overlap = -1.0",
     );
 
     let (err, _) = bake_error(&format!("include = [\"s.toml\"]\n{base}"));
     assert!(err.contains("include: the scene includes itself"), "{err}");
 
-    let (err, scene) = bake_error(&base.replace("bump = 1.0", "bump = 1.0\nshine = 2.0"));
-    assert!(err.contains("unknown field `shine`"), "{err}");
-    assert!(
-        err.contains(&format!("line {}", line_of(&scene, "shine"))),
-        "{err}"
+    assert_error_at(
+        &base.replace("bump = 1.0", "bump = 1.0\nshine = 2.0"),
+        "unknown field `shine`",
+        "shine",
     );
 
-    let (err, scene) = bake_error(&base.replace("interior_voxels = 16", "interior_voxels = 20"));
-    assert!(
-        err.contains("[bake] interior_voxels: 20 is not a multiple of 16"),
-        "{err}"
-    );
-    assert!(
-        err.contains(&format!("line {}", line_of(&scene, "interior_voxels"))),
-        "{err}"
+    assert_error_at(
+        &base.replace("interior_voxels = 16", "interior_voxels = 20"),
+        "[bake] interior_voxels: 20 is not a multiple of 16",
+        "interior_voxels",
     );
 
-    let (err, scene) =
-        bake_error(&base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"lapped\""));
-    assert!(
-        err.contains("unknown variant `lapped`, expected `fnpts` or `optimize`"),
-        "{err}"
-    );
-    assert!(
-        err.contains(&format!("line {}", line_of(&scene, "lapped"))),
-        "{err}"
+    assert_error_at(
+        &base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"lapped\""),
+        "unknown variant `lapped`, expected `fnpts` or `optimize`",
+        "lapped",
     );
 
     let (err, _) = bake_error(&base.replace("name = \"myoma-1\"", "name = \"myoma-7\""));

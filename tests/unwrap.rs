@@ -10,6 +10,7 @@ use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
 use organtex::mesh::{Components, Topology, TriMesh, io};
 use organtex::progress::Silent;
 use organtex::unwrap::overlap::overlapping_pairs;
+use organtex::unwrap::seamster::SeamOptions;
 use organtex::unwrap::visibility::Viewpoints;
 use organtex::unwrap::{UnwrapOptions, Unwrapped, abf, flatten, layout, unwrap};
 
@@ -61,6 +62,28 @@ fn bunny_is_one_low_distortion_chart() {
     assert!(
         m.seam_vis / m.seam_ratio < mean_vis,
         "seams are less visible than the average surface point"
+    );
+
+    // Refinement holds the flattening itself to the bounds, not its
+    // conformal estimate (which knows nothing of angles): asked for less
+    // than the default cut's conformality, it cuts on until it gets it.
+    let strict = m.conf_mean - 0.002;
+    let opts = UnwrapOptions {
+        seams: SeamOptions {
+            max_conformal: strict,
+            ..SeamOptions::default()
+        },
+        ..UnwrapOptions::default()
+    };
+    let tight = unwrap(&mesh, &opts, &Silent).unwrap();
+    assert_disk_charts(&tight, 1);
+    let rounds = |u: &Unwrapped| u.report.pieces[0].refinement_rounds;
+    assert!(
+        tight.report.metrics.conf_mean <= strict && rounds(&tight) > rounds(&u),
+        "conf_mean {} after {} rounds, asked for {strict}; the default took {} rounds",
+        tight.report.metrics.conf_mean,
+        rounds(&tight),
+        rounds(&u)
     );
 }
 

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use organtex::mesh::repair::make_manifold;
 use organtex::mesh::{Topology, io};
+use organtex::unwrap::seamster::SeamOptions;
 use organtex::unwrap::visibility::Viewpoints;
 use organtex::unwrap::{UnwrapOptions, debug, unwrap};
 use organtex::{Error, Result};
@@ -37,9 +38,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     cameras: Option<PathBuf>,
     /// Refine the seams until the mean |log area ratio| of the flattening is
-    /// at most this.
-    #[arg(long, default_value_t = 0.22, value_name = "X")]
+    /// at most this (0 would be no area distortion at all).
+    #[arg(long, default_value_t = SeamOptions::default().max_stretch, value_name = "X")]
     max_stretch: f64,
+    /// ... and its mean ratio of largest to smallest stretch at most this
+    /// (1 would be perfectly conformal).
+    #[arg(long, default_value_t = SeamOptions::default().max_conformal, value_name = "X")]
+    max_conformal: f64,
     /// Split non-manifold edges and vertices first instead of refusing the
     /// mesh.
     #[arg(long)]
@@ -58,6 +63,12 @@ pub fn run(args: Args) -> Result<()> {
             args.max_stretch
         )));
     }
+    if !(args.max_conformal >= 1.0 && args.max_conformal.is_finite()) {
+        return Err(Error::invalid(format!(
+            "--max-conformal must be a number of at least 1, not {}",
+            args.max_conformal
+        )));
+    }
     let mut mesh = io::read(&args.input)?;
     if args.repair {
         mesh = make_manifold(&mesh).0;
@@ -66,6 +77,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut opts = UnwrapOptions::default();
     opts.seams.max_stretch = args.max_stretch;
+    opts.seams.max_conformal = args.max_conformal;
     opts.split_overlaps = args.split_overlaps;
     opts.viewpoints = match &args.cameras {
         Some(file) => Viewpoints::Cameras(read_cameras(file)?),

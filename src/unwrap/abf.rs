@@ -50,11 +50,17 @@ impl Default for AbfOptions {
         // rad is far below what the least-squares layout can show.
         // Area weight 0.02: on the bunny area distortion falls by a seventh
         // while conformality stays well inside its 1.02 target (1.016).
+        // The local/global rounds converge slowly: over rounds 10 to 100,
+        // area_log keeps falling (bunny 0.261 -> 0.220, bone 0.285 ->
+        // 0.235, cow 0.209 -> 0.162) while conf_mean moves by at most
+        // 0.004;
+        // 30 rounds take most of that, at about 20 ms a round on the
+        // bunny.
         AbfOptions {
             max_iterations: 100,
             tolerance: 1e-7,
             area_weight: 0.02,
-            balance_rounds: 10,
+            balance_rounds: 30,
         }
     }
 }

@@ -6,9 +6,9 @@
 //! is area distortion, piled up where the surface curves most. Moving away
 //! from the conformal optimum costs conformality only to second order and
 //! gains area to first order: with a small weight on area, the texture's
-//! scale evens out for a barely measurable loss of angle (bunny: mean
-//! |log area ratio| 0.218 -> 0.187, mean sigma1/sigma2 1.014 -> 1.016 at the
-//! default weight, 0.02).
+//! scale evens out for a barely measurable loss of angle (bunny, default
+//! cut and weight 0.02: mean |log area ratio| 0.294 after the first round,
+//! 0.238 after 30, mean sigma1/sigma2 1.018 and 1.019).
 //!
 //! Energy, per triangle t of area A_t with Jacobian J_t (surface to uv):
 //! A_t (|J_t - L_t|^2 + lambda (a^2 + b^2 - 1)^2), L_t = [[a, b], [-b, a]]

@@ -143,6 +143,26 @@ pub fn conf_mean(faces: impl Iterator<Item = (f64, (f64, f64, f64))>) -> f64 {
     }
 }
 
+/// The area_log figure over (3D area, signed uv area) per face: mean
+/// |log(A_uv / A_3d)| weighted by 3D area, the uvs scaled so the total uv
+/// area equals the total 3D area; faces of no area in 3D or uv are left
+/// out of the mean but not of the scale.
+pub fn area_log(faces: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
+    let (total_3d, total_uv) = faces
+        .clone()
+        .fold((0.0, 0.0), |(a, u), (area, uv)| (a + area, u + uv.abs()));
+    let scale2 = if total_uv > 0.0 {
+        total_3d / total_uv
+    } else {
+        1.0
+    };
+    let sum: f64 = faces
+        .filter(|&(area, uv)| uv != 0.0 && area > 0.0)
+        .map(|(area, uv)| area * (uv.abs() * scale2 / area).ln().abs())
+        .sum();
+    sum / total_3d
+}
+
 /// Every figure of `mesh`'s uv layer; `edge_visibility` by `topo`'s edges.
 pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Option<UvMetrics> {
     let layer = mesh.uvs.as_ref()?;
@@ -155,12 +175,6 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
             jacobian(mesh.corners(f), u)
         })
         .collect();
-    let total_uv: f64 = jac.iter().map(|j| j.2.abs()).sum();
-    let scale2 = if total_uv > 0.0 {
-        total_3d / total_uv
-    } else {
-        1.0
-    };
 
     // Charts: faces joined across edges that are not seams.
     let seams = seam_edges(topo, layer);
@@ -194,12 +208,6 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
         overlapping[g as usize] = true;
     }
 
-    let mut area_log = 0.0;
-    for (f, &(_, _, signed)) in jac.iter().enumerate() {
-        if signed != 0.0 && area_3d[f] > 0.0 {
-            area_log += area_3d[f] * (signed.abs() * scale2 / area_3d[f]).ln().abs();
-        }
-    }
     let edge_length = |e: EdgeId| {
         let [a, b] = topo.edge_vertices(e);
         (mesh.positions[a.idx()] - mesh.positions[b.idx()]).length()
@@ -220,7 +228,7 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
         overlaps: overlapping.iter().filter(|&&o| o).count(),
         degenerate,
         conf_mean: conf_mean(area_3d.iter().copied().zip(jac.iter().copied())),
-        area_log: area_log / total_3d,
+        area_log: area_log(area_3d.iter().zip(&jac).map(|(&a, j)| (a, j.2))),
         seam_length,
         seam_ratio: seam_length / root_area,
         seam_vis: seam_vis / root_area,

@@ -246,7 +246,48 @@ fn unwrap_piece(
     let topo = Topology::build(&piece)?;
     let seen = visibility.restrict(topology, &origin, &topo);
     let component = Components::find(&topo).topology(&topo)[0].clone();
-    let seams = seamster::choose(
+    let split = opts.split_overlaps.then(|| {
+        let drawn = opts.atlas_faces.unwrap_or(usize::MAX);
+        faces.iter().map(|f| f.idx() < drawn).collect::<Vec<bool>>()
+    });
+    // Each try of a cut: its charts at mesh scale, and their figures.
+    let mut flatten_s = 0.0;
+    let flatten = |cut: &cutgraph::Cut| {
+        let t = Instant::now();
+        let cut_surface = cut.mesh(&piece.positions);
+        let charts = overlap::flatten_charts(&cut_surface, &opts.abf, split.as_deref())?;
+        let normalised: Vec<(TriMesh, Vec<DVec2>)> = charts
+            .iter()
+            .map(|c| {
+                let positions = c
+                    .origin
+                    .iter()
+                    .map(|&v| cut_surface.positions[v as usize])
+                    .collect();
+                let chart = TriMesh::new(positions, c.triangles.clone());
+                let uv = pack::normalise(&chart, c.uv.clone());
+                (chart, uv)
+            })
+            .collect();
+        let faces = || {
+            normalised.iter().flat_map(|(chart, uv)| {
+                (0..chart.num_faces()).map(|f| {
+                    let corners = chart.triangles[f].map(|v| uv[v as usize]);
+                    (
+                        chart.face_area(f),
+                        metrics::jacobian(chart.corners(f), corners),
+                    )
+                })
+            })
+        };
+        let distortion = seamster::Distortion {
+            area_log: metrics::area_log(faces().map(|(area, j)| (area, j.2))),
+            conf_mean: metrics::conf_mean(faces()),
+        };
+        flatten_s += t.elapsed().as_secs_f64();
+        Ok(((charts, normalised), distortion))
+    };
+    let (seams, (charts, normalised)) = seamster::choose(
         &piece,
         &topo,
         &seen.vertex,
@@ -254,47 +295,27 @@ fn unwrap_piece(
         seen.views,
         &opts.seams,
         progress,
+        flatten,
     )?;
-    let seams_s = t0.elapsed().as_secs_f64();
+    let seams_s = t0.elapsed().as_secs_f64() - flatten_s;
 
     let t1 = Instant::now();
-    progress.stage("flatten", 1);
-    let cut_surface = seams.cut.mesh(&piece.positions);
-    let split = opts.split_overlaps.then(|| {
-        let drawn = opts.atlas_faces.unwrap_or(usize::MAX);
-        faces.iter().map(|f| f.idx() < drawn).collect::<Vec<bool>>()
-    });
-    let charts = overlap::flatten_charts(&cut_surface, &opts.abf, split.as_deref())?;
-    // Each chart at mesh scale, side by side: one uv layer for the piece.
-    let normalised: Vec<Vec<DVec2>> = charts
-        .iter()
-        .map(|c| {
-            let positions = c
-                .origin
-                .iter()
-                .map(|&v| cut_surface.positions[v as usize])
-                .collect();
-            pack::normalise(&TriMesh::new(positions, c.triangles.clone()), c.uv.clone())
-        })
-        .collect();
     let placements = pack::outlines(
-        &charts
+        &normalised
             .iter()
-            .zip(&normalised)
             .map(|(c, uv)| (&c.triangles[..], &uv[..]))
             .collect::<Vec<_>>(),
     );
     let mut uv = Vec::new();
     let mut cut_triangles = vec![[0u32; 3]; faces.len()];
-    for ((chart, chart_uv), placement) in charts.iter().zip(&normalised).zip(placements) {
+    for ((chart, (_, chart_uv)), placement) in charts.iter().zip(&normalised).zip(placements) {
         let base = uv.len() as u32;
         uv.extend(placement.apply(chart_uv));
         for (k, &f) in chart.faces.iter().enumerate() {
             cut_triangles[f as usize] = chart.triangles[k].map(|v| v + base);
         }
     }
-    let flatten_s = t1.elapsed().as_secs_f64();
-    progress.advance(1);
+    let flatten_s = flatten_s + t1.elapsed().as_secs_f64();
 
     // The Seamster cut and any chart splits.
     let seam_edges = metrics::split_edges(&topo, |(f, i), (g, j)| {

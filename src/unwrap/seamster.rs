@@ -14,8 +14,10 @@
 //!    stretch (`conformal`), take the points conformally farthest from the
 //!    cut (largest |log scale|) as new terminals, and join each to the cut by
 //!    its cheapest path, the cost discounted where the scale is off so the
-//!    new branch runs through the region it relieves; until the stretch
-//!    target or a round cap.
+//!    new branch runs through the region it relieves; until the flattening
+//!    itself (ABF++ and area balancing, tried once the estimate meets the
+//!    stretch target) meets the stretch and conformality bounds, or a
+//!    round cap.
 //!
 //! Scales are relative to the surface (sqrt of its area, its mean edge), so
 //! the same settings serve a bunny, a bone and a uterus.
@@ -34,9 +36,12 @@ use crate::progress::{Progress, check};
 
 #[derive(Clone, Debug)]
 pub struct SeamOptions {
-    /// Stop refining once the estimated mean |log area ratio| (the area_log
-    /// figure) is at most this.
+    /// Refine until the flattening's mean |log area ratio| (the area_log
+    /// figure) is at most this. The conformal estimate of each cut says
+    /// when to flatten and try.
     pub max_stretch: f64,
+    /// ... and its mean sigma1 / sigma2 (conf_mean) at most this.
+    pub max_conformal: f64,
     /// At most this many refinement rounds.
     pub max_rounds: usize,
     /// New terminals per refinement round.
@@ -51,12 +56,29 @@ pub struct SeamOptions {
 impl Default for SeamOptions {
     fn default() -> Self {
         SeamOptions {
-            max_stretch: 0.22,
+            // The bounds the unwrap issue sets for any mesh. Seams are
+            // the cost, so refinement stops as soon as both are met.
+            max_stretch: 0.35,
+            max_conformal: 1.08,
             max_rounds: 16,
             terminals_per_round: 2,
             cone_threshold: 1.5,
             sharp_threshold: 0.7,
         }
+    }
+}
+
+/// A flattening's figures (`metrics`), which refinement holds to the
+/// options' bounds.
+#[derive(Clone, Copy, Debug)]
+pub struct Distortion {
+    pub area_log: f64,
+    pub conf_mean: f64,
+}
+
+impl Distortion {
+    fn meets(&self, opts: &SeamOptions) -> bool {
+        self.area_log <= opts.max_stretch && self.conf_mean <= opts.max_conformal
     }
 }
 
@@ -70,6 +92,8 @@ pub struct Seams {
     pub rounds: usize,
     /// Estimated mean |log area ratio| of the final cut's flattening.
     pub estimated_area_log: f64,
+    /// The flattening's own figures.
+    pub distortion: Distortion,
     pub cut: Cut,
 }
 
@@ -97,9 +121,13 @@ impl Surface<'_> {
     }
 }
 
-/// Choose seams for a connected, manifold surface. `edge_visibility` is by
-/// `topo`'s edges; `views` is how many views it was counted over.
-pub fn choose(
+/// Choose seams for a connected, manifold surface, and flatten it along
+/// them: `flatten` lays a cut out and gives its figures, which must meet
+/// the options' bounds (the estimate only says when to try).
+/// `edge_visibility` is by `topo`'s edges; `views` is how many views it
+/// was counted over.
+#[allow(clippy::too_many_arguments)]
+pub fn choose<T>(
     mesh: &TriMesh,
     topo: &Topology,
     vertex_visibility: &[f32],
@@ -107,7 +135,8 @@ pub fn choose(
     views: usize,
     opts: &SeamOptions,
     progress: &dyn Progress,
-) -> Result<Seams> {
+    mut flatten: impl FnMut(&Cut) -> Result<(T, Distortion)>,
+) -> Result<(Seams, T)> {
     let graph = EdgeGraph::new(topo);
     let length = graph.lengths(&mesh.positions);
     let curvature = Curvature::compute(mesh, topo);
@@ -199,16 +228,24 @@ pub fn choose(
         terminals = two_far_terminals(&s, &cone, terminals.first().copied());
     }
 
-    progress.stage("seams", opts.max_rounds as u64 + 1);
+    progress.stage("seams and flattening", opts.max_rounds as u64 + 1);
     let mut edges = steiner_seams(&s, &terminals, &loops);
     let mut rounds = 0;
     loop {
         check(progress)?;
         let cut = cut(mesh, &edges);
         assert_disks(&cut, &mesh.positions)?;
-        let (log_scale, area_log) = estimate_stretch(mesh, &cut)?;
+        let (log_scale, estimate) = estimate_stretch(mesh, &cut)?;
         progress.advance(1);
-        let added = if area_log <= opts.max_stretch || rounds >= opts.max_rounds {
+        let last = rounds >= opts.max_rounds;
+        // The estimate says when a cut may do; the flattening decides.
+        let mut flat = if estimate <= opts.max_stretch || last {
+            Some(flatten(&cut)?)
+        } else {
+            None
+        };
+        let done = last || flat.as_ref().is_some_and(|f| f.1.meets(opts));
+        let added = if done {
             Vec::new()
         } else {
             farthest_from_cut(
@@ -221,13 +258,19 @@ pub fn choose(
             )
         };
         if added.is_empty() {
-            return Ok(Seams {
+            let (flattened, distortion) = match flat.take() {
+                Some(f) => f,
+                None => flatten(&cut)?,
+            };
+            let seams = Seams {
                 edges,
                 terminals,
                 rounds,
-                estimated_area_log: area_log,
+                estimated_area_log: estimate,
+                distortion,
                 cut,
-            });
+            };
+            return Ok((seams, flattened));
         }
         edges = grow(&s, edges, &terminals, &added, &log_scale);
         terminals.extend(added);

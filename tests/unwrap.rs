@@ -78,12 +78,38 @@ fn bunny_is_one_low_distortion_chart() {
     let tight = unwrap(&mesh, &opts, &Silent).unwrap();
     assert_disk_charts(&tight, 1);
     let rounds = |u: &Unwrapped| u.report.pieces[0].refinement_rounds;
+    assert!(u.report.pieces[0].within_bounds && tight.report.pieces[0].within_bounds);
     assert!(
         tight.report.metrics.conf_mean <= strict && rounds(&tight) > rounds(&u),
         "conf_mean {} after {} rounds, asked for {strict}; the default took {} rounds",
         tight.report.metrics.conf_mean,
         rounds(&tight),
         rounds(&u)
+    );
+}
+
+#[test]
+fn a_bound_no_cut_can_meet_costs_a_few_flattenings_and_is_reported() {
+    // Perfect conformality: refinement flattens `max_tries` cuts, not one
+    // per round left, and the report says the bound was missed.
+    let mesh = io::read(&data("bunny10k_textured.obj")).unwrap();
+    let seams = SeamOptions {
+        max_conformal: 1.0,
+        ..SeamOptions::default()
+    };
+    let max_rounds = seams.max_rounds;
+    let opts = UnwrapOptions {
+        seams,
+        ..UnwrapOptions::default()
+    };
+    let u = unwrap(&mesh, &opts, &Silent).unwrap();
+    assert_disk_charts(&u, 1);
+    let piece = &u.report.pieces[0];
+    assert!(!piece.within_bounds);
+    assert!(
+        piece.refinement_rounds < max_rounds,
+        "{} rounds",
+        piece.refinement_rounds
     );
 }
 

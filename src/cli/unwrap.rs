@@ -107,6 +107,20 @@ pub fn run(args: Args) -> Result<()> {
             save(&dir.join("uv_layout.png"), &img)?;
         }
     }
+    let missed = result
+        .report
+        .pieces
+        .iter()
+        .filter(|p| !p.within_bounds)
+        .count();
+    if missed > 0 {
+        eprintln!(
+            "note: {missed} of {} pieces stay above --max-stretch {} or --max-conformal {} after the refinement rounds they were given",
+            result.report.pieces.len(),
+            args.max_stretch,
+            args.max_conformal
+        );
+    }
     let m = &result.report.metrics;
     println!(
         "{}: {} charts, {} flips, conf_mean {:.4}, area_log {:.3}, seam_ratio {:.2}, seam_vis {:.2}, {:.2} s",

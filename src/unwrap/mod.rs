@@ -75,6 +75,9 @@ pub struct PieceReport {
     pub boundary_loops: usize,
     pub terminals: usize,
     pub refinement_rounds: usize,
+    /// Whether the flattening met the stretch and conformality bounds
+    /// (`SeamOptions`); false when refinement ran out of rounds or tries.
+    pub within_bounds: bool,
     pub seam_edges: usize,
     /// Charts: 1, or more when a flattening overlapped itself and was split
     /// (`overlap`).
@@ -328,6 +331,7 @@ fn unwrap_piece(
             boundary_loops: component.boundary_loops,
             terminals: seams.terminals.len(),
             refinement_rounds: seams.rounds,
+            within_bounds: seams.within_bounds,
             seam_edges: seam_edges.len(),
             charts: charts.len(),
             flattening: charts.into_iter().map(|c| c.method).collect(),

@@ -98,10 +98,8 @@ pub struct Seams {
     pub rounds: usize,
     /// Estimated mean |log area ratio| of the final cut's flattening.
     pub estimated_area_log: f64,
-    /// The flattening's own figures.
-    pub distortion: Distortion,
-    /// Whether they meet the options' bounds (they may not when the
-    /// rounds or tries ran out).
+    /// Whether the flattening's figures meet the options' bounds (they
+    /// may not when the rounds or tries ran out).
     pub within_bounds: bool,
     pub cut: Cut,
 }
@@ -280,7 +278,6 @@ pub fn choose<T>(
                 rounds,
                 estimated_area_log: estimate,
                 within_bounds: distortion.meets(opts),
-                distortion,
                 cut,
             };
             return Ok((seams, flattened));

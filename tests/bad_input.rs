@@ -297,6 +297,11 @@ fn unwrap_refuses_bad_input_clearly_and_writes_nothing() {
         !ok && stderr.contains("--max-stretch must be a positive number"),
         "{stderr}"
     );
+    let (ok, _, stderr) = organtex(&["unwrap", c, "-o", o, "--max-conformal", "0.9"]);
+    assert!(
+        !ok && stderr.contains("--max-conformal must be a number of at least 1"),
+        "{stderr}"
+    );
 
     let nowhere = dir.path().join("missing/out.obj");
     check_refused(

@@ -92,17 +92,32 @@ CGAL_MESHES = ("hand", "triceratops", "dino", "homer", "bull", "camel", "bear", 
 
 
 def off_to_obj(src, dst):
-    """OFF (CGAL's format, which organtex does not read) to OBJ, polygons fanned."""
-    rows = [line.split("#")[0].split() for line in open(src)]
+    """ASCII OFF (CGAL's format, which organtex does not read) to OBJ,
+    polygons fanned. The header keyword (OFF, COFF, ...) is optional;
+    colours after a vertex's x y z or a face's indices are ignored; a face
+    may wrap onto the next line."""
+    with open(src) as f:
+        rows = [line.split("#")[0].split() for line in f]
     rows = [r for r in rows if r]
-    header = rows[0]
-    counts, body = (header[1:], rows[1:]) if len(header) > 1 else (rows[1], rows[2:])
-    nv, nf = int(counts[0]), int(counts[1])
+    if rows[0][0].upper().endswith("OFF"):
+        if rows[0][1:2] and rows[0][1].upper() == "BINARY":
+            sys.exit(f"compare_uv.py: {src}: binary OFF is not read")
+        rows[0] = rows[0][1:]
+        rows = [r for r in rows if r]
+    nv, nf = int(rows[0][0]), int(rows[0][1])
+    vertices, faces = rows[1:1 + nv], rows[1 + nv:]
     with open(dst, "w") as out:
-        for r in body[:nv]:
+        for r in vertices:
             out.write("v {} {} {}\n".format(*r[:3]))
-        for r in body[nv:nv + nf]:
-            idx = [int(i) + 1 for i in r[1:1 + int(r[0])]]
+        i = 0
+        for _ in range(nf):
+            row = list(faces[i])
+            i += 1
+            n = int(row[0])
+            while len(row) < 1 + n:
+                row += faces[i]
+                i += 1
+            idx = [int(v) + 1 for v in row[1:1 + n]]
             for a, b in zip(idx[1:], idx[2:]):
                 out.write(f"f {idx[0]} {a} {b}\n")
 
@@ -117,7 +132,10 @@ def cgal_meshes():
         return meshes
     folder.mkdir(parents=True, exist_ok=True)
     print(f"compare_uv.py: fetching {CGAL_PACKAGE} from Debian into {folder}", flush=True)
-    subprocess.run(["apt-get", "download", "-q", CGAL_PACKAGE], cwd=folder, check=True)
+    for old in folder.glob(f"{CGAL_PACKAGE}_*.deb"):
+        old.unlink()
+    if subprocess.run(["apt-get", "download", "-q", CGAL_PACKAGE], cwd=folder).returncode != 0:
+        sys.exit(f"compare_uv.py: apt-get could not download {CGAL_PACKAGE} (run apt-get update first?)")
     deb = next(folder.glob(f"{CGAL_PACKAGE}_*.deb"))
     subprocess.run(["dpkg-deb", "-x", str(deb), str(folder / "deb")], check=True)
     data = next((folder / "deb").rglob("data.tar.gz"))

@@ -41,8 +41,9 @@ pub struct Args {
     /// at most this (0 would be no area distortion at all).
     #[arg(long, default_value_t = SeamOptions::default().max_stretch, value_name = "X")]
     max_stretch: f64,
-    /// ... and its mean ratio of largest to smallest stretch at most this
-    /// (1 would be perfectly conformal).
+    /// Refine the seams until the flattening's mean ratio of largest to
+    /// smallest stretch is at most this too (1 would be perfectly
+    /// conformal).
     #[arg(long, default_value_t = SeamOptions::default().max_conformal, value_name = "X")]
     max_conformal: f64,
     /// Split non-manifold edges and vertices first instead of refusing the
@@ -115,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
         .count();
     if missed > 0 {
         eprintln!(
-            "note: {missed} of {} pieces stay above --max-stretch {} or --max-conformal {} after the refinement rounds they were given",
+            "note: {missed} of {} pieces miss the bounds (--max-stretch {}, --max-conformal {}, no flips) after the refinement they were given; the report's within_bounds says which",
             result.report.pieces.len(),
             args.max_stretch,
             args.max_conformal

@@ -49,8 +49,8 @@ impl Default for AbfOptions {
         // to 1e-7 (a 108k-face scanned bust: 58). An angle error of 1e-7
         // rad is far below what the least-squares layout can show.
         // Area weight 0.02: on the bunny area_log falls from 0.294 after
-        // the first round to 0.238 while conformality stays inside its
-        // 1.02 target (1.018 -> 1.019). The
+        // the first round to 0.238 while conformality stays inside the
+        // bunny's 1.02 target (1.018 -> 1.019). The
         // local/global rounds converge slowly: over rounds 10 to 100,
         // area_log keeps falling (bunny 0.261 -> 0.220, bone 0.285 ->
         // 0.235, cow 0.209 -> 0.162) while conf_mean moves by at most

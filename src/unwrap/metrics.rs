@@ -156,10 +156,11 @@ pub fn area_log(faces: impl Iterator<Item = (f64, f64)> + Clone) -> f64 {
     } else {
         1.0
     };
-    let sum: f64 = faces
+    // fold from +0.0: an empty f64 sum is -0.0.
+    let sum = faces
         .filter(|&(area, uv)| uv != 0.0 && area > 0.0)
         .map(|(area, uv)| area * (uv.abs() * scale2 / area).ln().abs())
-        .sum();
+        .fold(0.0, |a, b| a + b);
     sum / total_3d
 }
 

@@ -75,8 +75,11 @@ pub struct PieceReport {
     pub boundary_loops: usize,
     pub terminals: usize,
     pub refinement_rounds: usize,
+    /// Cuts flattened before one was kept (`SeamOptions::max_tries`).
+    pub flattenings: usize,
     /// Whether the flattening met the stretch and conformality bounds
-    /// (`SeamOptions`); false when refinement ran out of rounds or tries.
+    /// without flips (`SeamOptions`); false when refinement ran out of
+    /// rounds, tries or terminals far enough from the cut.
     pub within_bounds: bool,
     pub seam_edges: usize,
     /// Charts: 1, or more when a flattening overlapped itself and was split
@@ -272,8 +275,10 @@ fn unwrap_piece(
                 (chart, uv)
             })
             .collect();
-        let faces = || {
-            normalised.iter().flat_map(|(chart, uv)| {
+        // (3D area, Jacobian) of every chart face.
+        let chart_faces: Vec<(f64, (f64, f64, f64))> = normalised
+            .iter()
+            .flat_map(|(chart, uv)| {
                 (0..chart.num_faces()).map(|f| {
                     let corners = chart.triangles[f].map(|v| uv[v as usize]);
                     (
@@ -282,10 +287,11 @@ fn unwrap_piece(
                     )
                 })
             })
-        };
+            .collect();
         let distortion = seamster::Distortion {
-            area_log: metrics::area_log(faces().map(|(area, j)| (area, j.2))),
-            conf_mean: metrics::conf_mean(faces()),
+            area_log: metrics::area_log(chart_faces.iter().map(|&(area, j)| (area, j.2))),
+            conf_mean: metrics::conf_mean(chart_faces.iter().copied()),
+            flipped: chart_faces.iter().filter(|(_, j)| j.2 <= 0.0).count(),
         };
         flatten_s += t.elapsed().as_secs_f64();
         Ok(((charts, normalised), distortion))
@@ -331,6 +337,7 @@ fn unwrap_piece(
             boundary_loops: component.boundary_loops,
             terminals: seams.terminals.len(),
             refinement_rounds: seams.rounds,
+            flattenings: seams.flattenings,
             within_bounds: seams.within_bounds,
             seam_edges: seam_edges.len(),
             charts: charts.len(),

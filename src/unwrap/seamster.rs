@@ -16,8 +16,8 @@
 //!    its cheapest path, the cost discounted where the scale is off so the
 //!    new branch runs through the region it relieves; until the flattening
 //!    itself (ABF++ and area balancing, tried once the estimate meets the
-//!    stretch target) meets the stretch and conformality bounds, or a
-//!    round cap.
+//!    stretch target) meets the stretch and conformality bounds without
+//!    flips, or the rounds or tries run out (the report says so).
 //!
 //! Scales are relative to the surface (sqrt of its area, its mean edge), so
 //! the same settings serve a bunny, a bone and a uterus.
@@ -40,12 +40,14 @@ pub struct SeamOptions {
     /// figure) is at most this. The conformal estimate of each cut says
     /// when to flatten and try.
     pub max_stretch: f64,
-    /// ... and its mean sigma1 / sigma2 (conf_mean) at most this.
+    /// Refine until the flattening's mean sigma1 / sigma2 (the conf_mean
+    /// figure) is at most this too.
     pub max_conformal: f64,
-    /// At most this many cuts flattened. Flattening is most of the work,
-    /// and a bound a surface cannot meet (a scan's slivers can hold
-    /// conformality up whatever the cut) would flatten every round left:
-    /// the bunny asked for conf_mean 1.0 flattened 15 cuts in 17.6 s.
+    /// At most this many cuts flattened (0 is taken as 1). Flattening is
+    /// most of the work, and a bound a surface cannot meet (a scan's
+    /// slivers can hold conformality up whatever the cut) would flatten
+    /// every round left: the bunny asked for conf_mean 1.0 flattened 15
+    /// cuts, 17.6 s of a 20.9 s unwrap.
     pub max_tries: usize,
     /// At most this many refinement rounds.
     pub max_rounds: usize,
@@ -80,11 +82,16 @@ impl Default for SeamOptions {
 pub struct Distortion {
     pub area_log: f64,
     pub conf_mean: f64,
+    /// Faces whose uv triangle is reversed or has no area: a flattening
+    /// that left any (a fallback's) misses the bounds whatever its means.
+    pub flipped: usize,
 }
 
 impl Distortion {
     fn meets(&self, opts: &SeamOptions) -> bool {
-        self.area_log <= opts.max_stretch && self.conf_mean <= opts.max_conformal
+        self.flipped == 0
+            && self.area_log <= opts.max_stretch
+            && self.conf_mean <= opts.max_conformal
     }
 }
 
@@ -96,10 +103,11 @@ pub struct Seams {
     pub terminals: Vec<VertexId>,
     /// Refinement rounds run.
     pub rounds: usize,
-    /// Estimated mean |log area ratio| of the final cut's flattening.
-    pub estimated_area_log: f64,
+    /// Cuts flattened (tried), the last one kept.
+    pub flattenings: usize,
     /// Whether the flattening's figures meet the options' bounds (they
-    /// may not when the rounds or tries ran out).
+    /// may not when the rounds or tries ran out, or no new terminal was
+    /// far enough from the cut).
     pub within_bounds: bool,
     pub cut: Cut,
 }
@@ -238,6 +246,7 @@ pub fn choose<T>(
     progress.stage("seams and flattening", opts.max_rounds as u64 + 1);
     let mut edges = steiner_seams(&s, &terminals, &loops);
     let (mut rounds, mut tries) = (0, 0);
+    let max_tries = opts.max_tries.max(1);
     loop {
         check(progress)?;
         let cut = cut(mesh, &edges);
@@ -245,16 +254,19 @@ pub fn choose<T>(
         let (log_scale, estimate) = estimate_stretch(mesh, &cut)?;
         progress.advance(1);
         let last = rounds >= opts.max_rounds;
-        // The estimate says when a cut may do; the flattening decides.
-        let mut flat = if estimate <= opts.max_stretch || last {
+        // The estimate says when a cut may do; the flattening decides. A
+        // try that fails outright counts as missing the bounds while
+        // tries are left: a later cut may flatten.
+        let mut flat = None;
+        if estimate <= opts.max_stretch || last {
             tries += 1;
-            Some(flatten(&cut)?)
-        } else {
-            None
-        };
-        let done = last
-            || tries >= opts.max_tries.max(1)
-            || flat.as_ref().is_some_and(|f| f.1.meets(opts));
+            match flatten(&cut) {
+                Ok(f) => flat = Some(f),
+                Err(e) if last || tries >= max_tries => return Err(e),
+                Err(_) => {}
+            }
+        }
+        let done = last || tries >= max_tries || flat.as_ref().is_some_and(|f| f.1.meets(opts));
         let added = if done {
             Vec::new()
         } else {
@@ -270,13 +282,16 @@ pub fn choose<T>(
         if added.is_empty() {
             let (flattened, distortion) = match flat.take() {
                 Some(f) => f,
-                None => flatten(&cut)?,
+                None => {
+                    tries += 1;
+                    flatten(&cut)?
+                }
             };
             let seams = Seams {
                 edges,
                 terminals,
                 rounds,
-                estimated_area_log: estimate,
+                flattenings: tries,
                 within_bounds: distortion.meets(opts),
                 cut,
             };

@@ -673,6 +673,12 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
         "overlap = -1.0",
     );
 
+    assert_error_at(
+        &base.replace("overlap = 2.0", "overlap = 2.0\nmax_conformal = 0.9"),
+        "facet 'myoma-1' max_conformal: must be 1 or more, not 0.9",
+        "max_conformal",
+    );
+
     let (err, _) = bake_error(&format!("include = [\"s.toml\"]\n{base}"));
     assert!(err.contains("include: the scene includes itself"), "{err}");
 
@@ -726,6 +732,38 @@ fn the_scene_chooses_how_its_interior_is_synthesised() {
     assert_eq!(blocks[1], blocks[0]);
     assert_eq!(blocks[2].0, Method::Optimize);
     assert_ne!(blocks[2].1, blocks[0].1);
+}
+
+#[test]
+fn a_facet_can_ask_for_less_stretch_and_gets_it_with_more_seams() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = small_scene(0.0, 10.0, [0.0, 0.0]);
+    let wall = |body: &str, name: &str| {
+        let scene = scene_file(dir.path(), &format!("{name}.toml"), body);
+        let baked = bake(
+            &scene,
+            &dir.path().join(name),
+            &BakeOptions::default(),
+            &Silent,
+        )
+        .unwrap();
+        let line = baked.report.facets.iter().find(|f| f.facet.facet == "wall");
+        line.unwrap().facet.clone()
+    };
+    let default = wall(&base, "default");
+    let asked = default.metrics.area_log * 0.8;
+    let tight = wall(
+        &base.replace("bump = 1.0", &format!("bump = 1.0\nmax_stretch = {asked}")),
+        "tight",
+    );
+    assert!(
+        tight.metrics.area_log <= asked && tight.seam_length > default.seam_length,
+        "asked for area_log {asked}: {} with seams {} (default {} with seams {})",
+        tight.metrics.area_log,
+        tight.seam_length,
+        default.metrics.area_log,
+        default.seam_length
+    );
 }
 
 #[test]

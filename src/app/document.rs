@@ -15,6 +15,7 @@ use crate::scene::file::{
     self, BakeSettings, Camera, FacetSettings, Interior, MeshSpec, NodeSpec, Origin, SceneSpec,
 };
 use crate::scene::uterus::CavityParams;
+use crate::unwrap::seamster::SeamOptions;
 
 pub struct Document {
     pub spec: SceneSpec,
@@ -216,6 +217,8 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
                 overlay_opacity: 0.6,
                 overlay_tile_size: 1.0,
                 overlap: 0.0,
+                max_stretch: SeamOptions::default().max_stretch,
+                max_conformal: SeamOptions::default().max_conformal,
                 origin: origin.clone(),
             }],
             interior: None,

@@ -1186,6 +1186,7 @@ fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
 mod tests {
     use super::*;
     use crate::scene::file::FacetSettings;
+    use crate::unwrap::seamster::SeamOptions;
 
     fn settings(tile_size: f64, rotation: f64, offset: [f64; 2]) -> FacetSettings {
         FacetSettings {
@@ -1199,6 +1200,8 @@ mod tests {
             overlay_opacity: 0.0,
             overlay_tile_size: 1.0,
             overlap: 0.0,
+            max_stretch: SeamOptions::default().max_stretch,
+            max_conformal: SeamOptions::default().max_conformal,
             origin: Default::default(),
         }
     }

@@ -261,11 +261,13 @@ fn build_node(
             let facet_settings = settings[piece.facet as usize].clone();
             let piece_topo = Topology::build(&piece.mesh)?;
             let piece_seen = seen.restrict(&topology, &piece.vertex_origin, &piece_topo);
-            let opts = UnwrapOptions {
+            let mut opts = UnwrapOptions {
                 split_overlaps: for_atlases,
                 atlas_faces: Some(piece.own),
                 ..UnwrapOptions::default()
             };
+            opts.seams.max_stretch = facet_settings.max_stretch;
+            opts.seams.max_conformal = facet_settings.max_conformal;
             let unwrapped = unwrap_seen(&piece.mesh, piece_topo, piece_seen, &opts, &quiet)?;
             let mut piece = piece;
             piece.mesh = unwrapped.mesh;

@@ -16,6 +16,7 @@ use toml::Spanned;
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
 use crate::synth::block::{MAX_BLOCK, Method};
+use crate::unwrap::seamster::SeamOptions;
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -88,6 +89,10 @@ struct FacetEntry {
     overlay_tile_size: Option<Spanned<f64>>,
     #[serde(default = "zero")]
     overlap: Spanned<f64>,
+    #[serde(default = "default_max_stretch")]
+    max_stretch: Spanned<f64>,
+    #[serde(default = "default_max_conformal")]
+    max_conformal: Spanned<f64>,
 }
 
 fn default_tile() -> Spanned<f64> {
@@ -98,6 +103,12 @@ fn zero() -> Spanned<f64> {
 }
 fn default_opacity() -> Spanned<f64> {
     Spanned::new(0..0, 0.6)
+}
+fn default_max_stretch() -> Spanned<f64> {
+    Spanned::new(0..0, SeamOptions::default().max_stretch)
+}
+fn default_max_conformal() -> Spanned<f64> {
+    Spanned::new(0..0, SeamOptions::default().max_conformal)
 }
 
 /// The solid texture filling a node's inside, for cut surfaces (baked by
@@ -184,6 +195,11 @@ pub struct FacetSettings {
     /// Width of the ring, into the facets listed before this one, over which
     /// this facet's texture fades from 1 to 0.
     pub overlap: f64,
+    /// The unwrap's bounds for this facet (`SeamOptions`): seams are cut
+    /// until its flattening's area_log is at most `max_stretch` ...
+    pub max_stretch: f64,
+    /// ... and its conf_mean at most `max_conformal`.
+    pub max_conformal: f64,
     /// Where the facet's texture is named, for errors found later.
     #[serde(skip)]
     pub origin: Origin,
@@ -399,6 +415,8 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
             "from 0 to 1",
         )?;
         let tile_size = positive(&f.tile_size, "tile_size")?;
+        let max_stretch = positive(&f.max_stretch, "max_stretch")?;
+        let max_conformal = checked(&f.max_conformal, "max_conformal", |x| x >= 1.0, "1 or more")?;
         facets.push(FacetSettings {
             name: name.clone(),
             texture: f.texture.get_ref().clone(),
@@ -413,6 +431,8 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                 None => 2.0 * tile_size,
             },
             overlap,
+            max_stretch,
+            max_conformal,
             origin: Origin {
                 file: path.to_path_buf(),
                 line: line_of(text, f.texture.span().start),

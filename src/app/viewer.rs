@@ -889,6 +889,21 @@ impl Viewer {
                     s.offset = offset;
                 });
             }
+            // The facet's unwrap bound: seams against an even texture
+            // scale, taken up by the next unwrap.
+            let mut stretch = s.max_stretch;
+            let moved = ui
+                .add(egui::Slider::new(&mut stretch, 0.1..=0.5).text("max stretch"))
+                .on_hover_text(
+                    "how far the texture's scale may drift over this facet (mean |log area ratio|): \
+                     lower cuts more seams, which the bake blends away; applies at the next Unwrap",
+                )
+                .changed();
+            if moved && let Some(doc) = &mut self.doc {
+                let mut now = doc.settings(f).clone();
+                now.max_stretch = stretch;
+                doc.set_settings(f, now);
+            }
         }
         ui.separator();
         ui.label("Show");

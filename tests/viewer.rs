@@ -105,7 +105,11 @@ fn the_clinician_flow() {
     let doc = h.state().doc.as_ref().unwrap();
     assert_eq!(doc.settings((0, 1)).texture, "gravel");
     // The facet's seams-against-stretch bound is at hand.
-    assert!(h.query_all_by_label_contains("max stretch").next().is_some());
+    assert!(
+        h.query_all_by_label_contains("max stretch")
+            .next()
+            .is_some()
+    );
 
     // Unwrap again: the UI keeps drawing while it runs.
     h.get_by_label("Unwrap").click();

@@ -291,7 +291,10 @@ fn unwrap_piece(
         let distortion = seamster::Distortion {
             area_log: metrics::area_log(chart_faces.iter().map(|&(area, j)| (area, j.2))),
             conf_mean: metrics::conf_mean(chart_faces.iter().copied()),
-            flipped: chart_faces.iter().filter(|(_, j)| j.2 <= 0.0).count(),
+            flipped: chart_faces
+                .iter()
+                .filter(|&&(area, j)| j.2 < 0.0 || (j.2 == 0.0 && area > 0.0))
+                .count(),
         };
         flatten_s += t.elapsed().as_secs_f64();
         Ok(((charts, normalised), distortion))

@@ -82,8 +82,9 @@ impl Default for SeamOptions {
 pub struct Distortion {
     pub area_log: f64,
     pub conf_mean: f64,
-    /// Faces whose uv triangle is reversed or has no area: a flattening
-    /// that left any (a fallback's) misses the bounds whatever its means.
+    /// Faces whose uv triangle is reversed, or has no area where the
+    /// surface's has: a flattening that left any (a fallback's) misses
+    /// the bounds whatever its means.
     pub flipped: usize,
 }
 

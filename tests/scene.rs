@@ -642,11 +642,49 @@ fn assert_error_at(body: &str, message: &str, needle: &str) {
 fn bad_scenes_get_errors_naming_the_key_and_line() {
     let base = small_scene(0.0, 10.0, [0.0, 0.0]);
 
-    assert_error_at(
-        &base.replace("\"ihc-glands\"", "\"liver-capsule\""),
-        "facet 'myoma-1' texture: 'liver-capsule' is not in the tissue database",
-        "liver-capsule",
-    );
+    // (text in the base scene, what replaces it, the error's message, a
+    // needle on the line the error must name).
+    let cases = [
+        (
+            "\"ihc-glands\"",
+            "\"liver-capsule\"",
+            "facet 'myoma-1' texture: 'liver-capsule' is not in the tissue database",
+            "liver-capsule",
+        ),
+        (
+            "overlap = 2.0",
+            "overlap = -1.0",
+            "facet 'myoma-1' overlap: must be 0 or more, not -1",
+            "overlap = -1.0",
+        ),
+        (
+            "overlap = 2.0",
+            "overlap = 2.0\nmax_conformal = 0.9",
+            "facet 'myoma-1' max_conformal: must be 1 or more, not 0.9",
+            "max_conformal",
+        ),
+        (
+            "bump = 1.0",
+            "bump = 1.0\nshine = 2.0",
+            "unknown field `shine`",
+            "shine",
+        ),
+        (
+            "interior_voxels = 16",
+            "interior_voxels = 20",
+            "[bake] interior_voxels: 20 is not a multiple of 16",
+            "interior_voxels",
+        ),
+        (
+            "block_size = 5.0",
+            "block_size = 5.0\nmethod = \"lapped\"",
+            "unknown variant `lapped`, expected `fnpts` or `optimize`",
+            "lapped",
+        ),
+    ];
+    for (from, to, message, needle) in cases {
+        assert_error_at(&base.replace(from, to), message, needle);
+    }
 
     let missing_mesh = "[[node]]\nname = \"organ\"\nmesh = { file = \"liver.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
     let (err, _) = bake_error(missing_mesh);
@@ -667,38 +705,8 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
     );
     assert!(err.contains(&scene.0.display().to_string()), "{err}");
 
-    assert_error_at(
-        &base.replace("overlap = 2.0", "overlap = -1.0"),
-        "facet 'myoma-1' overlap: must be 0 or more, not -1",
-        "overlap = -1.0",
-    );
-
-    assert_error_at(
-        &base.replace("overlap = 2.0", "overlap = 2.0\nmax_conformal = 0.9"),
-        "facet 'myoma-1' max_conformal: must be 1 or more, not 0.9",
-        "max_conformal",
-    );
-
     let (err, _) = bake_error(&format!("include = [\"s.toml\"]\n{base}"));
     assert!(err.contains("include: the scene includes itself"), "{err}");
-
-    assert_error_at(
-        &base.replace("bump = 1.0", "bump = 1.0\nshine = 2.0"),
-        "unknown field `shine`",
-        "shine",
-    );
-
-    assert_error_at(
-        &base.replace("interior_voxels = 16", "interior_voxels = 20"),
-        "[bake] interior_voxels: 20 is not a multiple of 16",
-        "interior_voxels",
-    );
-
-    assert_error_at(
-        &base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"lapped\""),
-        "unknown variant `lapped`, expected `fnpts` or `optimize`",
-        "lapped",
-    );
 
     let (err, _) = bake_error(&base.replace("name = \"myoma-1\"", "name = \"myoma-7\""));
     assert!(

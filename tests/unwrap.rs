@@ -9,8 +9,9 @@ use organtex::mesh::curvature::corner_angles;
 use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
 use organtex::mesh::{Components, Topology, TriMesh, io};
 use organtex::progress::Silent;
+use organtex::unwrap::cutgraph::Cut;
 use organtex::unwrap::overlap::overlapping_pairs;
-use organtex::unwrap::seamster::SeamOptions;
+use organtex::unwrap::seamster::{self, Distortion, SeamOptions};
 use organtex::unwrap::visibility::Viewpoints;
 use organtex::unwrap::{UnwrapOptions, Unwrapped, abf, flatten, layout, unwrap};
 
@@ -106,12 +107,78 @@ fn a_bound_no_cut_can_meet_costs_a_few_flattenings_and_is_reported() {
     assert_disk_charts(&u, 1);
     let piece = &u.report.pieces[0];
     assert!(!piece.within_bounds);
+    let rounds: Vec<usize> = piece.tries.iter().map(|t| t.round).collect();
     assert!(
-        piece.flattenings == max_tries && piece.refinement_rounds < max_rounds,
-        "{} cuts flattened in {} rounds",
-        piece.flattenings,
-        piece.refinement_rounds
+        rounds.len() == max_tries && piece.refinement_rounds < max_rounds,
+        "cuts flattened in rounds {rounds:?}"
     );
+    // None meets the bound, so the one nearest it is kept.
+    let conf: Vec<f64> = piece
+        .tries
+        .iter()
+        .map(|t| t.figures.expect("every try flattened").conf_mean)
+        .collect();
+    let nearest = (0..conf.len())
+        .min_by(|&a, &b| conf[a].total_cmp(&conf[b]))
+        .unwrap();
+    assert_eq!(
+        piece.refinement_rounds, rounds[nearest],
+        "conf_mean per try {conf:?}"
+    );
+    assert!(
+        (u.report.metrics.conf_mean - conf[nearest]).abs() < 1e-9,
+        "kept conf_mean {} is the nearest try's {}",
+        u.report.metrics.conf_mean,
+        conf[nearest]
+    );
+}
+
+#[test]
+fn when_no_cut_meets_the_bounds_the_nearest_try_is_kept() {
+    // Seamster's choice among tries, given the flattenings' figures: with
+    // conformality 1.0 asked for, no try meets the bounds; the one nearest
+    // them is kept (not the last), and a flattening that fails is a missed
+    // try, not the end.
+    let mesh = io::read(&data("bunny.obj")).unwrap();
+    let topo = Topology::build(&mesh).unwrap();
+    let opts = SeamOptions {
+        max_stretch: 10.0,
+        max_conformal: 1.0,
+        ..SeamOptions::default()
+    };
+    let conf = [1.05, 1.03, f64::NAN, 1.04];
+    let mut calls = 0;
+    let flatten = |_: &Cut| {
+        calls += 1;
+        let c = conf[calls - 1];
+        if c.is_nan() {
+            return Err(organtex::Error::invalid("this flattening fails"));
+        }
+        let figures = Distortion {
+            area_log: 0.1,
+            conf_mean: c,
+            flipped: 0,
+        };
+        Ok((calls - 1, figures))
+    };
+    let visibility = (vec![0.0; mesh.num_vertices()], vec![0.0; topo.num_edges()]);
+    let (seams, kept) = seamster::choose(
+        &mesh,
+        &topo,
+        &visibility.0,
+        &visibility.1,
+        1,
+        &opts,
+        &Silent,
+        flatten,
+    )
+    .unwrap();
+    assert_eq!(kept, 1, "the try nearest the bounds is kept");
+    assert!(!seams.within_bounds);
+    assert_eq!(seams.tries.len(), opts.max_tries);
+    assert!(seams.tries[2].figures.is_none(), "the failed try is listed");
+    assert_eq!(seams.rounds, seams.tries[1].round);
+    assert!(seams.tries[1].round < seams.tries[3].round);
 }
 
 #[test]

@@ -74,9 +74,12 @@ pub struct PieceReport {
     pub genus: i64,
     pub boundary_loops: usize,
     pub terminals: usize,
+    /// Refinement rounds that made the kept cut.
     pub refinement_rounds: usize,
-    /// Cuts flattened before one was kept (`SeamOptions::max_tries`).
-    pub flattenings: usize,
+    /// The cuts flattened, in order, with their figures; at most
+    /// `SeamOptions::max_tries`. The kept one is the last when it meets the
+    /// bounds, else the one nearest them.
+    pub tries: Vec<seamster::Try>,
     /// Whether the flattening met the stretch and conformality bounds
     /// without flips (`SeamOptions`); false when refinement ran out of
     /// rounds, tries or terminals far enough from the cut.
@@ -340,7 +343,7 @@ fn unwrap_piece(
             boundary_loops: component.boundary_loops,
             terminals: seams.terminals.len(),
             refinement_rounds: seams.rounds,
-            flattenings: seams.flattenings,
+            tries: seams.tries,
             within_bounds: seams.within_bounds,
             seam_edges: seam_edges.len(),
             charts: charts.len(),

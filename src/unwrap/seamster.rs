@@ -78,7 +78,7 @@ impl Default for SeamOptions {
 
 /// A flattening's figures (`metrics`), which refinement holds to the
 /// options' bounds.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct Distortion {
     pub area_log: f64,
     pub conf_mean: f64,
@@ -94,6 +94,26 @@ impl Distortion {
             && self.area_log <= opts.max_stretch
             && self.conf_mean <= opts.max_conformal
     }
+
+    /// How far outside the bounds, for keeping the best of the tries when
+    /// none meets them: flips first, then the larger of the two figures'
+    /// excess, each as a fraction of its bound's room (1 = on the bound).
+    fn overshoot(&self, opts: &SeamOptions) -> (bool, f64) {
+        let room = |bound: f64| bound.max(1e-9);
+        (
+            self.flipped > 0,
+            (self.area_log / room(opts.max_stretch))
+                .max((self.conf_mean - 1.0) / room(opts.max_conformal - 1.0)),
+        )
+    }
+}
+
+/// One cut flattened: the refinement round it came from and its figures
+/// (`None`: the flattening failed).
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Try {
+    pub round: usize,
+    pub figures: Option<Distortion>,
 }
 
 /// The seams chosen for one connected surface.
@@ -102,13 +122,15 @@ pub struct Seams {
     /// Interior edges to cut.
     pub edges: Vec<EdgeId>,
     pub terminals: Vec<VertexId>,
-    /// Refinement rounds run.
+    /// Refinement rounds that made the kept cut.
     pub rounds: usize,
-    /// Cuts flattened (tried), the last one kept.
-    pub flattenings: usize,
-    /// Whether the flattening's figures meet the options' bounds (they
-    /// may not when the rounds or tries ran out, or no new terminal was
-    /// far enough from the cut).
+    /// The cuts flattened, in order. The last is kept when it meets the
+    /// bounds; when none does, the one nearest them (the earliest, with
+    /// the fewest seams, among equals), whose round `rounds` is.
+    pub tries: Vec<Try>,
+    /// Whether the kept flattening's figures meet the options' bounds
+    /// (they may not when the rounds or tries ran out, or no new terminal
+    /// was far enough from the cut).
     pub within_bounds: bool,
     pub cut: Cut,
 }
@@ -246,7 +268,8 @@ pub fn choose<T>(
 
     progress.stage("seams and flattening", opts.max_rounds as u64 + 1);
     let mut edges = steiner_seams(&s, &terminals, &loops);
-    let (mut rounds, mut tries) = (0, 0);
+    let mut rounds = 0;
+    let mut tried = Tries::default();
     let max_tries = opts.max_tries.max(1);
     loop {
         check(progress)?;
@@ -258,16 +281,17 @@ pub fn choose<T>(
         // The estimate says when a cut may do; the flattening decides. A
         // try that fails outright counts as missing the bounds while
         // tries are left: a later cut may flatten.
-        let mut flat = None;
+        let mut met = false;
         if estimate <= opts.max_stretch || last {
-            tries += 1;
-            match flatten(&cut) {
-                Ok(f) => flat = Some(f),
-                Err(e) if last || tries >= max_tries => return Err(e),
+            let flat = flatten(&cut);
+            let out_of_tries = tried.list.len() + 1 >= max_tries;
+            match tried.record(flat, opts, rounds, &edges, &terminals, &cut) {
+                Ok(m) => met = m,
+                Err(e) if (last || out_of_tries) && tried.kept.is_none() => return Err(e),
                 Err(_) => {}
             }
         }
-        let done = last || tries >= max_tries || flat.as_ref().is_some_and(|f| f.1.meets(opts));
+        let done = met || last || tried.list.len() >= max_tries;
         let added = if done {
             Vec::new()
         } else {
@@ -281,26 +305,78 @@ pub fn choose<T>(
             )
         };
         if added.is_empty() {
-            let (flattened, distortion) = match flat.take() {
-                Some(f) => f,
-                None => {
-                    tries += 1;
-                    flatten(&cut)?
-                }
-            };
-            let seams = Seams {
-                edges,
-                terminals,
-                rounds,
-                flattenings: tries,
-                within_bounds: distortion.meets(opts),
-                cut,
-            };
+            if tried.kept.is_none() {
+                // No terminal far enough to add before any cut flattened.
+                tried.record(flatten(&cut), opts, rounds, &edges, &terminals, &cut)?;
+            }
+            let (mut seams, flattened, _) = tried.kept.expect("a flattening was kept");
+            seams.tries = tried.list;
             return Ok((seams, flattened));
         }
         edges = grow(&s, edges, &terminals, &added, &log_scale);
         terminals.extend(added);
         rounds += 1;
+    }
+}
+
+/// The cuts flattened so far, and the one kept: the one nearest the bounds
+/// (the earliest, with the fewest seams, among equals).
+struct Tries<T> {
+    list: Vec<Try>,
+    kept: Option<(Seams, T, Distortion)>,
+}
+
+impl<T> Default for Tries<T> {
+    fn default() -> Self {
+        Tries {
+            list: Vec::new(),
+            kept: None,
+        }
+    }
+}
+
+impl<T> Tries<T> {
+    /// Record a flattening of `cut`; whether it meets the bounds.
+    fn record(
+        &mut self,
+        flat: Result<(T, Distortion)>,
+        opts: &SeamOptions,
+        round: usize,
+        edges: &[EdgeId],
+        terminals: &[VertexId],
+        cut: &Cut,
+    ) -> Result<bool> {
+        let (flattened, figures) = match flat {
+            Ok(f) => f,
+            Err(e) => {
+                self.list.push(Try {
+                    round,
+                    figures: None,
+                });
+                return Err(e);
+            }
+        };
+        self.list.push(Try {
+            round,
+            figures: Some(figures),
+        });
+        let met = figures.meets(opts);
+        let nearer = self
+            .kept
+            .as_ref()
+            .is_none_or(|(_, _, kept)| figures.overshoot(opts) < kept.overshoot(opts));
+        if nearer {
+            let seams = Seams {
+                edges: edges.to_vec(),
+                terminals: terminals.to_vec(),
+                rounds: round,
+                tries: Vec::new(),
+                within_bounds: met,
+                cut: cut.clone(),
+            };
+            self.kept = Some((seams, flattened, figures));
+        }
+        Ok(met)
     }
 }
 

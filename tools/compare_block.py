@@ -11,8 +11,22 @@ N`, which measures four slices per axis), and prints every axis's figures,
 their ratio to 2D, the tiling seam and the time; "missed" marks an axis
 over 1.5x of 2D or with a seam over 1.15 (the issue's targets).
 
+With --floor it also prints the coherence floor of any block that copies
+its exemplar region by region (one exemplar coordinate per voxel, as
+FNPTS). A slice shows x horizontally whenever x is in its plane and z
+vertically, but y horizontally across x and vertically across z; a region
+copying the exemplar upright must map x to the exemplar's u, z to v, and y
+to one of them, so in every region the slices across x or those across z
+are not upright copies: a streak (y and z both on v) or the exemplar
+transposed. The worst of those two axes has at least half its area so,
+and coherence is a mean over the slice's patches: its floor is
+(upright + min(streak, transposed)) / 2, each measured on a slice made
+from a tileable 2D texture of the exemplar, before any seam between
+regions. A floor over 1.5x of 2D means no such block meets the target.
+
 Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize]
-                              [--organtex target/release/organtex] [IMAGE ...]
+                              [--floor] [--organtex target/release/organtex]
+                              [IMAGE ...]
   default images: the database's gravel and ihc photographs.
 Exits 1 if a block fails to synthesise; the ratios are reported, not judged.
 """
@@ -26,7 +40,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pyenv  # noqa: E402
+
+ROOT = pyenv.ROOT
 SOURCES = ROOT / "database" / "sources"
 LIMIT = 1.5
 NUMBER = r"(-?[\d.]+|NaN|inf)"
@@ -49,9 +66,43 @@ def reference(organtex, image, side, tmp):
     for seed in range(3):
         texture = tmp / f"flat_{seed}.png"
         run([organtex, "synth", image, "--crop", crop, "--size", side, "--tileable", "--seed", seed, "-o", texture])
-        figures.append(json.loads(run([organtex, "synth-quality", image, texture, "--crop", crop])))
+        figures.append(quality(organtex, image, side, texture))
     return (statistics.median(f["coherence"] for f in figures),
             statistics.median(f["completeness"] for f in figures))
+
+
+def quality(organtex, image, side, texture):
+    return json.loads(run([organtex, "synth-quality", image, texture, "--crop", f"0,0,{side},{side}"]))
+
+
+def floor(organtex, image, side, tmp):
+    """Coherence of an upright, a streaked and a transposed slice, and the
+    floor they imply (module doc)."""
+    from PIL import Image
+    tile_path = tmp / "tile.png"
+    run([organtex, "synth", image, "--crop", f"0,0,{side},{side}", "--size", side, "--tileable",
+         "--seed", 0, "-o", tile_path])
+    tile = Image.open(tile_path).convert("RGB")
+
+    def measure(name, img):
+        path = tmp / f"{name}.png"
+        img.save(path)
+        return quality(organtex, image, side, path)["coherence"]
+
+    def streak(x0):
+        # Across x with y and z both on v: the pixel at (y, z) is T(x0, y + z).
+        column = [tile.getpixel((x0, v)) for v in range(side)]
+        img = Image.new("RGB", (side, side))
+        img.putdata([column[(y + z) % side] for z in range(side) for y in range(side)])
+        return img
+
+    coherence = {
+        "upright": measure("upright", tile),
+        # The kindest of a few columns: a floor should not overstate.
+        "streak": min(measure("streak", streak(k * side // 8)) for k in range(8)),
+        "transposed": measure("transposed", tile.transpose(Image.Transpose.TRANSPOSE)),
+    }
+    return coherence, (coherence["upright"] + min(coherence["streak"], coherence["transposed"])) / 2
 
 
 def block(organtex, image, side, method, tmp):
@@ -69,9 +120,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("images", nargs="*", type=Path)
     parser.add_argument("--sizes", nargs="+", type=int, default=[64, 128])
-    parser.add_argument("--methods", nargs="+", default=["fnpts", "optimize"])
+    parser.add_argument("--methods", nargs="*", default=["fnpts", "optimize"])
+    parser.add_argument("--floor", action="store_true",
+                        help="also print the coherence floor of region-copying blocks (module doc)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
+    if args.floor:
+        pyenv.ensure(["pillow"], __file__)
     images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png"]
 
     print(f"{'exemplar':<12}{'size':>5}  {'method':<9}{'time s':>8}  {'axis':<5}{'coh':>7}{'comp':>7}"
@@ -82,6 +137,11 @@ def main():
             for side in args.sizes:
                 coh2, comp2 = reference(args.organtex, image, side, tmp)
                 print(f"{image.stem:<12}{side:>5}  {'2D':<9}{'':>8}  {'':<5}{coh2:7.2f}{comp2:7.2f}")
+                if args.floor:
+                    coherence, least = floor(args.organtex, image, side, tmp)
+                    parts = ", ".join(f"{k} {v:.2f}" for k, v in coherence.items())
+                    print(f"{image.stem:<12}{side:>5}  {'floor':<9}{'':>8}  {'x|z':<5}{least:7.2f}{'':>7}"
+                          f"{least / coh2:8.2f}    ({parts})", flush=True)
                 for method in args.methods:
                     seconds, axes = block(args.organtex, image, side, method, tmp)
                     for k, (axis, coh, comp, seam) in enumerate(axes):

@@ -23,6 +23,9 @@ and coherence is a mean over the slice's patches: its floor is
 (upright + min(streak, transposed)) / 2, each measured on a slice made
 from a tileable 2D texture of the exemplar, before any seam between
 regions. A floor over 1.5x of 2D means no such block meets the target.
+It also prints, as "photo", the median figures of other N x N crops of the
+same photograph against the exemplar crop: what the material itself
+scores, a texture that is right without being copied from the exemplar.
 
 Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize]
                               [--floor] [--organtex target/release/organtex]
@@ -105,6 +108,23 @@ def floor(organtex, image, side, tmp):
     return coherence, (coherence["upright"] + min(coherence["streak"], coherence["transposed"])) / 2
 
 
+def photo(organtex, image, side, tmp):
+    """Median coherence and completeness of the photograph's other crops
+    (right of, below and diagonal to the exemplar crop) against it."""
+    from PIL import Image
+    full = Image.open(image).convert("RGB")
+    figures = []
+    for x, y in [(side, 0), (0, side), (side, side)]:
+        if x + side <= full.width and y + side <= full.height:
+            path = tmp / "crop.png"
+            full.crop((x, y, x + side, y + side)).save(path)
+            figures.append(quality(organtex, image, side, path))
+    if not figures:
+        return float("nan"), float("nan")
+    return (statistics.median(f["coherence"] for f in figures),
+            statistics.median(f["completeness"] for f in figures))
+
+
 def block(organtex, image, side, method, tmp):
     """Seconds, and per axis (axis, coherence, completeness, seam)."""
     out = run([organtex, "synth3d", image, "--crop", f"0,0,{side},{side}", "--size", side,
@@ -122,7 +142,7 @@ def main():
     parser.add_argument("--sizes", nargs="+", type=int, default=[64, 128])
     parser.add_argument("--methods", nargs="*", default=["fnpts", "optimize"])
     parser.add_argument("--floor", action="store_true",
-                        help="also print the coherence floor of region-copying blocks (module doc)")
+                        help="also print the photograph's other crops' figures and the coherence floor of region-copying blocks (module doc)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
     if args.floor:
@@ -138,6 +158,9 @@ def main():
                 coh2, comp2 = reference(args.organtex, image, side, tmp)
                 print(f"{image.stem:<12}{side:>5}  {'2D':<9}{'':>8}  {'':<5}{coh2:7.2f}{comp2:7.2f}")
                 if args.floor:
+                    coh, comp = photo(args.organtex, image, side, tmp)
+                    print(f"{image.stem:<12}{side:>5}  {'photo':<9}{'':>8}  {'':<5}{coh:7.2f}{comp:7.2f}"
+                          f"{coh / coh2:8.2f}{comp / comp2:8.2f}", flush=True)
                     coherence, least = floor(args.organtex, image, side, tmp)
                     parts = ", ".join(f"{k} {v:.2f}" for k, v in coherence.items())
                     print(f"{image.stem:<12}{side:>5}  {'floor':<9}{'':>8}  {'x|z':<5}{least:7.2f}{'':>7}"

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
+    quiet_headless_vulkan();
     let args = cli::Cli::parse();
     cli::progress::catch_interrupts();
     match cli::run(args) {
@@ -23,5 +24,19 @@ fn main() -> ExitCode {
             }
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Without a desktop session (no XDG_RUNTIME_DIR: a server, CI, a bake
+/// farm), Mesa's implicit device-select Vulkan layer tries to reach a
+/// Wayland display to rank the GPUs and prints "error: XDG_RUNTIME_DIR is
+/// invalid" on every run that renders, though nothing failed. organtex
+/// picks its adapter itself, so the layer is turned off there (its own
+/// switch, NODEVICE_SELECT), unless the user set that switch.
+fn quiet_headless_vulkan() {
+    use std::env;
+    if env::var_os("XDG_RUNTIME_DIR").is_none() && env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: first thing in main, before any other thread exists.
+        unsafe { env::set_var("NODEVICE_SELECT", "1") };
     }
 }

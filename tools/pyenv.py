@@ -1,5 +1,7 @@
 """The tools' shared Python environment: target/pyenv, created on first use
-with the packages a tool needs, then the tool re-runs itself inside it."""
+with the packages a tool needs, then the tool re-runs itself inside it.
+Blender's bpy pins its own numpy, so it gets an environment of its own
+(`python_with`)."""
 
 import os
 import subprocess
@@ -12,20 +14,26 @@ VENV = ROOT / "target" / "pyenv"
 IMPORT_NAMES = {"pillow": "PIL"}
 
 
-def ensure(requirements, script):
-    """Re-run `script` inside target/pyenv with `requirements` installed."""
-    python = VENV / "bin" / "python"
-    inside = Path(sys.prefix).resolve() == VENV.resolve()
+def python_with(requirements, venv=VENV, tool="tools"):
+    """The interpreter of `venv`, created if missing, with `requirements`
+    installed."""
+    python = venv / "bin" / "python"
     if not python.exists():
-        print(f"{Path(script).name}: creating {VENV}", flush=True)
-        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
+        print(f"{tool}: creating {venv}", flush=True)
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
         subprocess.run([str(python), "-m", "pip", "install", "-q", "--upgrade", "pip"], check=True)
     missing = subprocess.run(
         [str(python), "-c", "import importlib.util, sys; sys.exit(any(importlib.util.find_spec(m) is None for m in sys.argv[1:]))",
          *[IMPORT_NAMES.get(name, name) for name in (r.split("=")[0].split("[")[0] for r in requirements)]],
     ).returncode != 0
     if missing:
-        print(f"{Path(script).name}: installing {' '.join(requirements)}", flush=True)
+        print(f"{tool}: installing {' '.join(requirements)}", flush=True)
         subprocess.run([str(python), "-m", "pip", "install", "-q", *requirements], check=True)
-    if not inside:
+    return python
+
+
+def ensure(requirements, script):
+    """Re-run `script` inside target/pyenv with `requirements` installed."""
+    python = python_with(requirements, VENV, Path(script).name)
+    if Path(sys.prefix).resolve() != VENV.resolve():
         os.execv(str(python), [str(python), script, *sys.argv[1:]])

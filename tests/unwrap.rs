@@ -5,13 +5,15 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
-use organtex::mesh::curvature::corner_angles;
+use organtex::mesh::curvature::{Curvature, corner_angles};
+use organtex::mesh::graph::EdgeGraph;
 use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
-use organtex::mesh::{Components, Topology, TriMesh, io};
+use organtex::mesh::{Components, Topology, TriMesh, VertexId, io};
 use organtex::progress::Silent;
 use organtex::unwrap::cutgraph::Cut;
 use organtex::unwrap::overlap::overlapping_pairs;
 use organtex::unwrap::seamster::{self, Distortion, SeamOptions};
+use organtex::unwrap::terminals::{disc_curvature, select};
 use organtex::unwrap::visibility::Viewpoints;
 use organtex::unwrap::{UnwrapOptions, Unwrapped, abf, flatten, layout, unwrap};
 
@@ -179,6 +181,63 @@ fn when_no_cut_meets_the_bounds_the_nearest_try_is_kept() {
     assert!(seams.tries[2].figures.is_none(), "the failed try is listed");
     assert_eq!(seams.rounds, seams.tries[1].round);
     assert!(seams.tries[1].round < seams.tries[3].round);
+}
+
+#[test]
+fn sampled_disc_curvature_finds_the_exact_terminals() {
+    // Large meshes sum curvature discs once per grid cell a quarter of
+    // the radius wide; forced onto the bunny, it finds every exact
+    // terminal within a cell's diagonal.
+    let mesh = io::read(&data("bunny.obj")).unwrap();
+    let topo = Topology::build(&mesh).unwrap();
+    let graph = EdgeGraph::new(&topo);
+    let defect = Curvature::compute(&mesh, &topo).angle_defect;
+    let radius = 0.05 * mesh.area().sqrt();
+    let opts = SeamOptions::default();
+    let terminals = |exact_limit: usize| {
+        let cone = disc_curvature(&graph, &mesh.positions, &defect, radius, exact_limit);
+        select(
+            &graph,
+            &mesh.positions,
+            &cone,
+            2.0 * radius,
+            opts.cone_threshold,
+            &[],
+            |_| true,
+        )
+    };
+    let (exact, sampled) = (terminals(usize::MAX), terminals(0));
+    assert!(exact.len() >= 4, "{} exact terminals", exact.len());
+    let reach = radius / 4.0 * 3f64.sqrt();
+    for t in &exact {
+        let nearest = sampled
+            .iter()
+            .map(|s| mesh.positions[s.idx()].distance(mesh.positions[t.idx()]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest <= reach,
+            "exact terminal {t:?}: nearest sampled one {nearest} away, over {reach}"
+        );
+    }
+    // Any other is a real cone the exact run's suppression happened to
+    // cover (its own disc is over the threshold), and they are few.
+    let exact_cone = disc_curvature(&graph, &mesh.positions, &defect, radius, usize::MAX);
+    let near = |t: &VertexId| {
+        exact
+            .iter()
+            .any(|e| mesh.positions[e.idx()].distance(mesh.positions[t.idx()]) <= reach)
+    };
+    let others: Vec<&VertexId> = sampled.iter().filter(|t| !near(t)).collect();
+    assert!(
+        others.len() <= 2,
+        "{} terminals not found exactly",
+        others.len()
+    );
+    assert!(
+        others
+            .iter()
+            .all(|t| exact_cone[t.idx()] >= opts.cone_threshold)
+    );
 }
 
 #[test]

@@ -17,7 +17,8 @@
 //!    new branch runs through the region it relieves; until the flattening
 //!    itself (ABF++ and area balancing, tried once the estimate meets the
 //!    stretch target) meets the stretch and conformality bounds without
-//!    flips, or the rounds or tries run out (the report says so).
+//!    flips, or the rounds or tries run out (the report says so, and the
+//!    try nearest the bounds is kept).
 //!
 //! Scales are relative to the surface (sqrt of its area, its mean edge), so
 //! the same settings serve a bunny, a bone and a uterus.
@@ -161,7 +162,8 @@ impl Surface<'_> {
 
 /// Choose seams for a connected, manifold surface, and flatten it along
 /// them: `flatten` lays a cut out and gives its figures, which must meet
-/// the options' bounds (the estimate only says when to try).
+/// the options' bounds (the estimate only says when to try). When no cut
+/// tried meets them, the one nearest them is returned (`Seams::tries`).
 /// `edge_visibility` is by `topo`'s edges; `views` is how many views it
 /// was counted over.
 #[allow(clippy::too_many_arguments)]

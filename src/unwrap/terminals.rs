@@ -42,7 +42,10 @@ pub fn disc_curvature(
             .abs()
     };
     let mut scratch = DiscScratch::new(n);
-    let probes: Vec<usize> = (0..16).map(|k| k * n / 16).filter(|&v| v < n).collect();
+    let probes: Vec<usize> = (0..16)
+        .map(|k| k * n / 16)
+        .filter(|&v| v < n && !graph.neighbours(VertexId::from(v)).is_empty())
+        .collect();
     let typical = probes
         .iter()
         .map(|&v| disc(graph, positions, VertexId::from(v), radius, &mut scratch).len())

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use organtex::mesh::{Components, Topology, TriMesh};
 use organtex::progress::{Progress, Silent};
-use organtex::scene::bake::{BakeOptions, BakeReport, bake};
+use organtex::scene::bake::{BakeOptions, BakeReport, Baked, bake};
 use organtex::scene::uterus::{self, CavityParams};
 use organtex::solid::section::{Plane, plane_section};
 use organtex::synth::block::Method;
@@ -29,6 +29,13 @@ fn scene_file(dir: &Path, name: &str, body: &str) -> PathBuf {
     let text = format!("database = {:?}\n{body}", root().join("database"));
     std::fs::write(&path, text).unwrap();
     path
+}
+
+/// Write scene `name` into `dir` and bake it to `dir/name` with default
+/// options.
+fn bake_in(dir: &Path, name: &str, body: &str) -> Baked {
+    let scene = scene_file(dir, &format!("{name}.toml"), body);
+    bake(&scene, &dir.join(name), &BakeOptions::default(), &Silent).unwrap()
 }
 
 /// A small cavity with one myoma: quick to bake, one seam-cut wall and one
@@ -225,20 +232,13 @@ fn a_closed_mesh_wound_inside_out_stays_double_sided() {
     for (name, mesh, double_sided) in [("out", &cube, false), ("in", &inside_out, true)] {
         let file = dir.path().join(format!("{name}.obj"));
         organtex::mesh::io::write_obj(&file, mesh, None).unwrap();
-        let scene = scene_file(
+        let baked = bake_in(
             dir.path(),
-            &format!("{name}.toml"),
+            name,
             &format!(
                 "[[node]]\nname = \"cube\"\nmesh = {{ file = {file:?} }}\n[[node.facet]]\nname = \"*\"\ntexture = \"fundus-tissue\"\n"
             ),
         );
-        let baked = bake(
-            &scene,
-            &dir.path().join(name),
-            &BakeOptions::default(),
-            &Silent,
-        )
-        .unwrap();
         let (json, _) = glb_chunks(&baked.glb);
         for m in json["materials"].as_array().unwrap() {
             assert_eq!(m["doubleSided"], double_sided, "{name}: {}", m["name"]);
@@ -747,14 +747,7 @@ fn a_facet_can_ask_for_less_stretch_and_gets_it_with_more_seams() {
     let dir = tempfile::tempdir().unwrap();
     let base = small_scene(0.0, 10.0, [0.0, 0.0]);
     let wall = |body: &str, name: &str| {
-        let scene = scene_file(dir.path(), &format!("{name}.toml"), body);
-        let baked = bake(
-            &scene,
-            &dir.path().join(name),
-            &BakeOptions::default(),
-            &Silent,
-        )
-        .unwrap();
+        let baked = bake_in(dir.path(), name, body);
         let line = baked.report.facets.iter().find(|f| f.facet.facet == "wall");
         line.unwrap().facet.clone()
     };

@@ -117,6 +117,7 @@ pub fn workloads() -> Vec<Workload> {
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,
         },
+        #[cfg(feature = "render")]
         Workload {
             name: "frame default",
             what: "the default scene drawn 960x720 after a texture drag step (uniform write, draw, read back), on this machine's GPU adapter",
@@ -264,6 +265,7 @@ fn median(sorted: &[f64]) -> f64 {
 /// One frame of the texture-drag path: the bundled scene unwrapped and on
 /// the GPU (untimed); timed: move a texture (one uniform), draw, read the
 /// pixels back (so the GPU's work is inside the time).
+#[cfg(feature = "render")]
 fn frame_step(root: &Path) -> Result<Step> {
     use crate::render::{Gpu, GpuScene, Layers, Offscreen, Renderer, View};
     use crate::scene::draw::DrawList;
@@ -273,7 +275,7 @@ fn frame_step(root: &Path) -> Result<Step> {
     let gpu = Gpu::headless()?;
     let renderer = Renderer::new(&gpu.device);
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list)?;
-    let target = Offscreen::new(&gpu.device, [960, 720]);
+    let target = Offscreen::new(&gpu, &renderer, [960, 720]);
     let view = View {
         camera: crate::render::OrbitCamera::for_scene(&spec.cameras, scene.bounds),
         layers: Layers::default(),
@@ -293,6 +295,7 @@ fn frame_step(root: &Path) -> Result<Step> {
             }
         }
         target.draw(&renderer, &gpu.device, &gpu.queue, &scene, &view);
-        target.read(&gpu.device, &gpu.queue).map(drop)
+        target.read(&gpu.device, &gpu.queue)?;
+        gpu.take_error()
     }))
 }

@@ -4,6 +4,7 @@
 //! project's shared folder): `mesh` is the foundation every other stage
 //! builds on.
 
+#[cfg(feature = "render")]
 pub mod app;
 pub mod atomic;
 pub mod bench;
@@ -14,6 +15,7 @@ pub mod linalg;
 pub mod mesh;
 pub mod progress;
 pub mod raster;
+#[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
 pub mod scene;

@@ -29,7 +29,7 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
     let list = DrawList::of(&baked, None);
     let renderer = Renderer::new(&gpu.device);
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list).unwrap();
-    let target = Offscreen::new(&gpu.device, [320, 240]);
+    let target = Offscreen::new(&gpu, &renderer, [320, 240]);
     let camera = OrbitCamera::for_scene(&spec.cameras, scene.bounds);
     let draw = |layers: Layers| {
         let view = View {
@@ -98,6 +98,51 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
     assert_eq!(draw(Layers::default()), full);
 }
 
+/// The bake's preview drawn through wgpu's GL backend and its Vulkan
+/// backend (llvmpipe for both where there is no GPU) is the same picture:
+/// mean absolute difference under 0.5 of 255 in every channel, and no
+/// more than 0.5% of the pixels off by more than 8. On GL the frame also
+/// goes through the pass that encodes it for egui, which this checks.
+#[test]
+fn the_preview_is_the_same_on_gl_and_vulkan() {
+    let spec = file::load(&repo("scenes/hysteroscopy_myomas.toml")).unwrap();
+    let baked = build_scene(&spec, false, &Silent).unwrap();
+    let list = DrawList::of(&baked, None);
+    let draw = |backends: wgpu::Backends| {
+        let gpu = Gpu::headless_with(backends)
+            .unwrap_or_else(|e| panic!("{e} (tools/test.sh installs both GL and Vulkan drivers)"));
+        let picture = organtex::render::preview(&gpu, &baked, &list, [480, 360]).unwrap();
+        (gpu.adapter, picture)
+    };
+    let (gl_adapter, gl) = draw(wgpu::Backends::GL);
+    let (vk_adapter, vk) = draw(wgpu::Backends::VULKAN);
+    assert!(gl_adapter.contains("Gl") && vk_adapter.contains("Vulkan"));
+    let mut sum = [0u64; 3];
+    let mut far = 0;
+    for (p, q) in gl.pixels().zip(vk.pixels()) {
+        let d: Vec<u64> = (0..3).map(|c| p[c].abs_diff(q[c]) as u64).collect();
+        for c in 0..3 {
+            sum[c] += d[c];
+        }
+        far += d.iter().any(|&d| d > 8) as usize;
+    }
+    let n = (gl.width() * gl.height()) as f64;
+    let mean = sum.map(|s| s as f64 / n);
+    eprintln!(
+        "GL {gl_adapter} vs Vulkan {vk_adapter}: mean |diff| {mean:.3?}, {far} pixels off by > 8"
+    );
+    let (_, _, var) = lit_pixels(&image::DynamicImage::ImageRgb8(gl.clone()).to_rgba8());
+    assert!(
+        var > 100.0,
+        "GL drew the textured scene (variance {var:.1})"
+    );
+    assert!(mean.iter().all(|&m| m < 0.5), "mean |diff| {mean:?}");
+    assert!(
+        (far as f64) < 0.005 * n,
+        "{far} pixels differ by more than 8"
+    );
+}
+
 #[test]
 fn a_cut_face_shows_the_interior_block() {
     let gpu = gpu();
@@ -127,7 +172,9 @@ fn a_cut_face_shows_the_interior_block() {
     let mut scene =
         GpuScene::new(&renderer, &gpu.device, &gpu.queue, &DrawList::default()).unwrap();
     let placement = Placement::new(lo, (hi - lo).x / 4.0 / n as f64).unwrap();
-    scene.set_block(&renderer, &gpu.device, &gpu.queue, &volume, &placement);
+    scene
+        .set_block(&renderer, &gpu.device, &gpu.queue, &volume, &placement)
+        .unwrap();
     scene.set_cut(
         &gpu.device,
         Some(&CutMesh {
@@ -139,7 +186,7 @@ fn a_cut_face_shows_the_interior_block() {
     let mut camera = OrbitCamera::fit(lo, hi);
     camera.yaw = 0.0;
     camera.pitch = 0.0;
-    let target = Offscreen::new(&gpu.device, [256, 256]);
+    let target = Offscreen::new(&gpu, &renderer, [256, 256]);
     let view = View {
         camera,
         layers: Layers::default(),
@@ -181,4 +228,41 @@ fn a_headless_bake_prints_no_error_lines() {
         !stderr.lines().any(|l| l.to_lowercase().contains("error")),
         "a successful bake printed: {stderr}"
     );
+}
+
+/// A GPU that cannot draw the preview (forced here by a texture limit
+/// below the preview's size, a real validation error from wgpu) costs the
+/// bake its preview only: exit 0, one warning line naming the reason,
+/// every other output written, and report.json says why.
+#[test]
+fn a_preview_the_gpu_cannot_draw_is_a_warning_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(["bake", repo("scenes/bunny.toml").to_str().unwrap(), "-o"])
+        .arg(dir.path())
+        .env(organtex::render::MAX_TEXTURE_ENV, "64")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].contains("preview.png not written: GPU error")
+            && warnings[0].contains("exceeds the limit"),
+        "{}",
+        warnings[0]
+    );
+    assert!(!dir.path().join("preview.png").exists());
+    for f in ["scene.glb", "report.json"] {
+        assert!(dir.path().join(f).is_file(), "{f} written");
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("report.json")).unwrap()).unwrap();
+    let why = report["preview_error"].as_str().unwrap_or_default();
+    assert!(why.contains("GPU error"), "report.json: {why}");
 }

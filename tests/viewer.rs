@@ -280,6 +280,40 @@ fn a_broken_mesh_shows_a_message_and_keeps_the_scene() {
     assert_eq!(h.state().doc.as_ref().unwrap().spec.name, name);
 }
 
+/// A GPU error on the viewer's device (here a texture wgpu refuses, as a
+/// driver limit or a lost device would be met) is shown at the top of the
+/// window; the viewer goes on drawing.
+#[test]
+fn a_gpu_error_shows_in_the_window_and_the_viewer_goes_on() {
+    let mut h = viewer(Some(repo("tests/data/cube.obj")));
+    settle(&mut h);
+    let limit = h.state().gpu().device.limits().max_texture_dimension_2d;
+    let _refused = h
+        .state()
+        .gpu()
+        .device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some("too wide"),
+            size: wgpu::Extent3d {
+                width: limit + 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+    h.run_steps(3);
+    let m = h.state().message.clone().expect("a message");
+    assert!(m.error && m.text.contains("GPU error"), "{m:?}");
+    h.get_by_label_contains("GPU error");
+    let (lit, _, _) = lit_pixels(&h.state().read_scene().unwrap());
+    assert!(lit > 1000, "the cube is still drawn ({lit} lit pixels)");
+}
+
 #[test]
 fn a_drag_draws_at_half_resolution_and_the_full_picture_follows() {
     let mut h = viewer(Some(repo("tests/data/cube.obj")));

@@ -159,12 +159,7 @@ impl Viewer {
             .wgpu_render_state
             .as_ref()
             .ok_or_else(|| Error::invalid("the viewer needs eframe's wgpu renderer"))?;
-        let info = rs.adapter.get_info();
-        let gpu = Gpu::from_parts(
-            rs.device.clone(),
-            rs.queue.clone(),
-            format!("{} ({:?})", info.name, info.backend),
-        );
+        let gpu = Gpu::from_parts(rs.device.clone(), rs.queue.clone(), &rs.adapter);
         let renderer = Renderer::new(&gpu.device);
         let mut viewer = Viewer {
             gpu,
@@ -216,6 +211,11 @@ impl Viewer {
 
     pub fn adapter(&self) -> &str {
         &self.gpu.adapter
+    }
+
+    /// The device the viewer draws on (tests provoke GPU errors on it).
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
     }
 
     fn wake(&self) -> impl Fn() + Send + 'static {
@@ -482,14 +482,16 @@ impl Viewer {
             Ok(p) => p,
             Err(e) => return self.error(e),
         };
-        if let Some(scene) = &mut self.scene {
-            scene.set_block(
+        if let Some(scene) = &mut self.scene
+            && let Err(e) = scene.set_block(
                 &self.renderer,
                 &self.gpu.device,
                 &self.gpu.queue,
                 &volume,
                 &placement,
-            );
+            )
+        {
+            self.error(e);
         }
         self.cut_made = None;
         self.touch();
@@ -636,13 +638,13 @@ impl Viewer {
             .as_ref()
             .is_none_or(|t| t.offscreen.size != size)
         {
-            let offscreen = Offscreen::new(&self.gpu.device, size);
+            let offscreen = Offscreen::new(&self.gpu, &self.renderer, size);
             let mut r = self.egui_renderer.write();
             let id = match self.targets[slot].take() {
                 Some(old) => {
                     r.update_egui_texture_from_wgpu_texture(
                         &self.gpu.device,
-                        &offscreen.display_view,
+                        offscreen.display_view(),
                         wgpu::FilterMode::Linear,
                         old.id,
                     );
@@ -650,7 +652,7 @@ impl Viewer {
                 }
                 None => r.register_native_texture(
                     &self.gpu.device,
-                    &offscreen.display_view,
+                    offscreen.display_view(),
                     wgpu::FilterMode::Linear,
                 ),
             };
@@ -1087,6 +1089,11 @@ impl Viewer {
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        // A GPU error (the device's, a validation or memory one) is shown
+        // at the top instead of ending the program.
+        if let Err(e) = self.gpu.take_error() {
+            self.error(e);
+        }
         self.poll_jobs();
         self.update_section();
         self.screenshot_step(&ctx);

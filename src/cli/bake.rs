@@ -114,7 +114,10 @@ fn print(baked: &Baked) {
     println!("      {}", baked.report_json.display());
     match &baked.preview {
         Some(p) => println!("      {}", p.display()),
-        None => eprintln!("warning: preview.png not written: {}", r.preview_renderer),
+        None => eprintln!(
+            "warning: preview.png not written: {}",
+            r.preview_error.as_deref().unwrap_or("no reason given")
+        ),
     }
     for i in &r.interiors {
         println!(

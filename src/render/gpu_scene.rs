@@ -222,14 +222,27 @@ fn buffer(
 }
 
 /// An RGBA texture with its mip chain (each level half the last,
-/// filtered on the CPU: wgpu has no mipmap generation of its own).
+/// filtered on the CPU: wgpu has no mipmap generation of its own). A
+/// picture wider or taller than the device allows starts at the first
+/// level that fits (GL devices may allow only 2048).
 fn texture_2d(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     img: &image::RgbaImage,
     srgb: bool,
 ) -> wgpu::TextureView {
-    let mut levels = vec![img.clone()];
+    let limit = device.limits().max_texture_dimension_2d.max(1);
+    let mut img = std::borrow::Cow::Borrowed(img);
+    while img.width() > limit || img.height() > limit {
+        let (w, h) = ((img.width() / 2).max(1), (img.height() / 2).max(1));
+        img = std::borrow::Cow::Owned(image::imageops::resize(
+            img.as_ref(),
+            w,
+            h,
+            image::imageops::FilterType::Triangle,
+        ));
+    }
+    let mut levels = vec![img.into_owned()];
     while levels
         .last()
         .is_some_and(|l| l.width() > 1 || l.height() > 1)
@@ -252,8 +265,8 @@ fn texture_2d(
         &wgpu::TextureDescriptor {
             label: Some("texture"),
             size: wgpu::Extent3d {
-                width: img.width(),
-                height: img.height(),
+                width: levels[0].width(),
+                height: levels[0].height(),
                 depth_or_array_layers: 1,
             },
             mip_level_count: levels.len() as u32,
@@ -373,6 +386,7 @@ impl GpuScene {
     }
 
     /// The interior block the cut surfaces sample, placed in object space.
+    /// A block larger than the device's 3D textures is refused.
     pub fn set_block(
         &mut self,
         renderer: &Renderer,
@@ -380,7 +394,14 @@ impl GpuScene {
         queue: &wgpu::Queue,
         volume: &Volume,
         placement: &Placement,
-    ) {
+    ) -> Result<()> {
+        let limit = device.limits().max_texture_dimension_3d as usize;
+        if volume.size.iter().any(|&s| s > limit) {
+            return Err(crate::Error::invalid(format!(
+                "the interior block is {:?} voxels, over this GPU's 3D texture limit of {limit} a side; cuts are drawn without it",
+                volume.size
+            )));
+        }
         let [w, h, d] = volume.size.map(|s| s as u32);
         let data: Vec<u8> = volume
             .voxels
@@ -415,6 +436,7 @@ impl GpuScene {
         );
         let bind_group = renderer.block_bind_group(device, &view, &placement);
         self.block = Some(GpuBlock { bind_group });
+        Ok(())
     }
 
     pub fn has_block(&self) -> bool {

@@ -17,7 +17,7 @@ mod preview;
 mod renderer;
 
 pub use camera::OrbitCamera;
-pub use gpu::Gpu;
+pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};
 pub use preview::preview;
 pub use renderer::{Layers, Offscreen, Renderer, View};

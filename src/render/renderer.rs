@@ -68,7 +68,32 @@ pub struct Renderer {
     wire: wgpu::RenderPipeline,
     seam: wgpu::RenderPipeline,
     cut: wgpu::RenderPipeline,
+    /// Copies a frame into a plain-bytes texture for egui where the
+    /// device cannot view one texture in two formats (`Offscreen`).
+    encode_layout: wgpu::BindGroupLayout,
+    encode: wgpu::RenderPipeline,
 }
+
+/// Reads the sRGB frame (decoded as it is loaded) and writes it encoded
+/// again into a texture whose format is not sRGB: the same bytes.
+const ENCODE_WGSL: &str = r"
+@group(0) @binding(0) var frame: texture_2d<f32>;
+
+@vertex
+fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    // One triangle over the whole target.
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_encode(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    let c = textureLoad(frame, vec2<i32>(p.xy), 0);
+    let low = c.rgb * 12.92;
+    let high = 1.055 * pow(c.rgb, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return vec4<f32>(select(high, low, c.rgb <= vec3<f32>(0.0031308)), c.a);
+}
+";
 
 fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -137,6 +162,7 @@ pub(crate) fn shader_sources() -> [String; 2] {
 
 impl Renderer {
     pub fn new(device: &wgpu::Device) -> Renderer {
+        let (encode_layout, encode) = encode_pipeline(device);
         let [facet_src, cut_src] = shader_sources();
         let facet = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("facet.wgsl"),
@@ -309,6 +335,8 @@ impl Renderer {
                 false,
                 false,
             ),
+            encode_layout,
+            encode,
             globals,
             globals_group,
             material_layout,
@@ -490,20 +518,87 @@ impl Renderer {
     }
 }
 
+fn encode_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("encode"),
+        source: wgpu::ShaderSource::Wgsl(ENCODE_WGSL.into()),
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("encode"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        }],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("encode"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("encode"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_full"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_encode"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: DISPLAY_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    (layout, pipeline)
+}
+
+/// egui takes its textures' values as sRGB-encoded bytes: a sRGB view
+/// would decode them and the window would show the picture too dark.
+const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// How the frame reaches egui.
+enum Display {
+    /// The frame's own texture viewed as plain bytes (needs the
+    /// VIEW_FORMATS capability).
+    Reinterpreted(wgpu::TextureView),
+    /// A second texture the frame is encoded into after each draw (GL).
+    Encoded {
+        texture: wgpu::Texture,
+        view: wgpu::TextureView,
+        frame: wgpu::BindGroup,
+    },
+}
+
 /// A colour and depth target of a fixed size, readable as an image.
 pub struct Offscreen {
     pub size: [u32; 2],
     pub colour: wgpu::Texture,
     pub colour_view: wgpu::TextureView,
-    /// The same pixels seen as plain bytes, for egui, which takes its
-    /// textures' values as sRGB-encoded (a sRGB view would decode them
-    /// and the window would show the picture too dark).
-    pub display_view: wgpu::TextureView,
+    display: Display,
     depth_view: wgpu::TextureView,
 }
 
 impl Offscreen {
-    pub fn new(device: &wgpu::Device, size: [u32; 2]) -> Offscreen {
+    /// A target `size` pixels on `gpu`'s device, for `renderer`'s frames.
+    pub fn new(gpu: &super::Gpu, renderer: &Renderer, size: [u32; 2]) -> Offscreen {
+        let device = &gpu.device;
         let extent = wgpu::Extent3d {
             width: size[0].max(1),
             height: size[1].max(1),
@@ -521,23 +616,50 @@ impl Offscreen {
                 view_formats,
             })
         };
-        let colour = texture(
-            COLOUR_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-            &[wgpu::TextureFormat::Rgba8Unorm],
-        );
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING;
+        let view_formats: &[wgpu::TextureFormat] = if gpu.view_formats {
+            &[DISPLAY_FORMAT]
+        } else {
+            &[]
+        };
+        let colour = texture(COLOUR_FORMAT, usage, view_formats);
+        let colour_view = colour.create_view(&Default::default());
+        let display = if gpu.view_formats {
+            Display::Reinterpreted(colour.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(DISPLAY_FORMAT),
+                ..Default::default()
+            }))
+        } else {
+            let encoded = texture(DISPLAY_FORMAT, usage, &[]);
+            Display::Encoded {
+                view: encoded.create_view(&Default::default()),
+                texture: encoded,
+                frame: device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("encode"),
+                    layout: &renderer.encode_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&colour_view),
+                    }],
+                }),
+            }
+        };
         let depth = texture(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT, &[]);
         Offscreen {
             size: [extent.width, extent.height],
-            colour_view: colour.create_view(&Default::default()),
-            display_view: colour.create_view(&wgpu::TextureViewDescriptor {
-                format: Some(wgpu::TextureFormat::Rgba8Unorm),
-                ..Default::default()
-            }),
+            colour_view,
+            display,
             colour,
             depth_view: depth.create_view(&Default::default()),
+        }
+    }
+
+    /// The frame as plain sRGB-encoded bytes, for egui.
+    pub fn display_view(&self) -> &wgpu::TextureView {
+        match &self.display {
+            Display::Reinterpreted(view) | Display::Encoded { view, .. } => view,
         }
     }
 
@@ -559,11 +681,37 @@ impl Offscreen {
             scene,
             view,
         );
+        if let Display::Encoded { view, frame, .. } = &self.display {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("encode"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&renderer.encode);
+            pass.set_bind_group(0, frame, &[]);
+            pass.draw(0..3, 0..1);
+        }
         queue.submit([encoder.finish()]);
     }
 
-    /// The target's pixels (sRGB, as a PNG stores them).
+    /// The target's pixels (sRGB, as a PNG stores them), read from what
+    /// egui shows, so that tests see the display path too.
     pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<image::RgbaImage> {
+        let shown = match &self.display {
+            Display::Reinterpreted(_) => &self.colour,
+            Display::Encoded { texture, .. } => texture,
+        };
         let [w, h] = self.size;
         // Rows of a texture-to-buffer copy are padded to 256 bytes.
         let row = (4 * w).div_ceil(256) * 256;
@@ -575,7 +723,7 @@ impl Offscreen {
         });
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.copy_texture_to_buffer(
-            self.colour.as_image_copy(),
+            shown.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
                 layout: wgpu::TexelCopyBufferLayout {
@@ -611,7 +759,8 @@ impl Offscreen {
         }
         drop(data);
         buffer.unmap();
-        Ok(image::RgbaImage::from_raw(w, h, pixels).expect("sized"))
+        image::RgbaImage::from_raw(w, h, pixels)
+            .ok_or_else(|| Error::invalid("GPU readback: fewer bytes than pixels"))
     }
 }
 
@@ -621,7 +770,8 @@ mod tests {
     /// fails here and not in a user's window.
     #[test]
     fn shaders_validate() {
-        for src in super::shader_sources() {
+        let [facet, cut] = super::shader_sources();
+        for src in [facet, cut, super::ENCODE_WGSL.to_string()] {
             let module = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
             naga::valid::Validator::new(

@@ -118,8 +118,12 @@ pub struct BakeReport {
     /// The finest tissue texture's texels per mesh unit (its width over its
     /// tile size): an atlas below it blurs that tissue.
     pub texture_density: f64,
-    /// The GPU adapter that drew preview.png, or why there is none.
+    /// The GPU adapter that drew preview.png (or tried to), "none" when
+    /// there is none.
     pub preview_renderer: String,
+    /// Why preview.png was not written; absent when it was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preview_error: Option<String>,
     pub facets: Vec<FacetLine>,
     pub borders: Vec<BorderLine>,
     pub interiors: Vec<InteriorLine>,
@@ -196,22 +200,11 @@ pub fn bake(
     let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
     let glb = gltf::encode(&list, &spec.name)?;
     progress.advance(1);
-    // The preview goes through the viewer's renderer; a machine with no
-    // GPU adapter at all (not even a software one) gets the bake without
-    // it, and the report says why.
+    // The preview goes through the viewer's renderer. A machine with no
+    // GPU adapter, or one that cannot draw it (a limit, memory, a driver
+    // error), gets the bake without it, and the report says why.
     let [w, h] = opts.preview;
-    let (picture, preview_renderer) = match crate::render::Gpu::headless() {
-        Ok(gpu) => (
-            Some(crate::render::preview(
-                &gpu,
-                &baked,
-                &list,
-                [w as u32, h as u32],
-            )?),
-            gpu.adapter,
-        ),
-        Err(e) => (None, format!("none: {e}")),
-    };
+    let (picture, preview_renderer, preview_error) = draw_preview(&baked, &list, [w, h]);
     progress.advance(1);
     check(progress)?;
     let output_s = t.elapsed().as_secs_f64();
@@ -248,6 +241,7 @@ pub fn bake(
         atlas_density: opts.atlas.map(|size| atlas::density(&baked.nodes, size)),
         texture_density: texture_density(&baked),
         preview_renderer,
+        preview_error,
         facets,
         borders,
         interiors: interiors.iter().map(|(line, _)| line.clone()).collect(),
@@ -381,4 +375,31 @@ fn atlases(
         unblended.push(u);
     }
     Ok((blended, unblended))
+}
+
+/// The preview, the adapter that drew it (or "none") and, when it could
+/// not be drawn, why.
+#[cfg(feature = "render")]
+fn draw_preview(
+    baked: &BakedScene,
+    list: &DrawList,
+    [w, h]: [usize; 2],
+) -> (Option<image::RgbImage>, String, Option<String>) {
+    match crate::render::Gpu::headless() {
+        Ok(gpu) => match crate::render::preview(&gpu, baked, list, [w as u32, h as u32]) {
+            Ok(picture) => (Some(picture), gpu.adapter, None),
+            Err(e) => (None, gpu.adapter, Some(e.to_string())),
+        },
+        Err(e) => (None, "none".into(), Some(e.to_string())),
+    }
+}
+
+#[cfg(not(feature = "render"))]
+fn draw_preview(
+    _: &BakedScene,
+    _: &DrawList,
+    _: [usize; 2],
+) -> (Option<image::RgbImage>, String, Option<String>) {
+    let why = "organtex was built without its renderer (feature `render`)";
+    (None, "none".into(), Some(why.into()))
 }

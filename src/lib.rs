@@ -12,6 +12,7 @@ pub mod blend;
 pub mod db;
 pub mod error;
 pub mod linalg;
+pub mod memory;
 pub mod mesh;
 pub mod progress;
 pub mod raster;

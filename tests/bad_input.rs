@@ -652,3 +652,957 @@ fn section_refuses_bad_input_clearly_and_writes_nothing() {
     assert!(!ok && stderr.contains("positive scale"), "{stderr}");
     assert!(!out.exists() && !d("cut.jpg").exists(), "no output written");
 }
+
+/// Run organtex with its address space capped at 8 GiB, so that a refused
+/// case that allocated what its file claims would abort instead of
+/// erroring, and with `ORGANTEX_MEMORY_LIMIT` when given.
+fn organtex_bounded(limit: Option<&str>, args: &[&str]) -> (bool, String, String) {
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c")
+        .arg("ulimit -v 8388608 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_organtex"))
+        .args(args)
+        .env_remove("ORGANTEX_MEMORY_LIMIT");
+    if let Some(l) = limit {
+        cmd.env("ORGANTEX_MEMORY_LIMIT", l);
+    }
+    let out = cmd.output().unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `check_refused` under `organtex_bounded`.
+fn check_refused_bounded(
+    limit: Option<&str>,
+    name: &str,
+    path: &Path,
+    expect: &str,
+    args: &[&str],
+) {
+    let (ok, stdout, stderr) = organtex_bounded(limit, args);
+    assert!(!ok, "{name}: exit code 0\n{stdout}");
+    assert!(!stderr.contains("panicked"), "{name}: panic\n{stderr}");
+    assert!(
+        stderr.contains(&path.display().to_string()),
+        "{name}: the error does not name {}:\n{stderr}",
+        path.display()
+    );
+    assert!(
+        stderr.contains(expect),
+        "{name}: expected `{expect}` in:\n{stderr}"
+    );
+    assert_eq!(
+        stderr.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{name}: one error\n{stderr}"
+    );
+}
+
+/// An argument refused with a clear message and no panic (clap's own
+/// errors name the argument rather than a file).
+fn check_arg_refused(args: &[&str], expect: &str) {
+    let (ok, stdout, stderr) = organtex(args);
+    assert!(!ok, "{args:?}: exit code 0\n{stdout}");
+    assert!(!stderr.contains("panicked"), "{args:?}: panic\n{stderr}");
+    assert!(
+        stderr.contains(expect),
+        "{args:?}: expected `{expect}` in:\n{stderr}"
+    );
+}
+
+/// A PNG chunk: length, type, data, CRC-32.
+fn png_chunk(kind: &[u8; 4], data: &[u8]) -> Vec<u8> {
+    let mut crc = 0xffff_ffffu32;
+    for &b in kind.iter().chain(data) {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    let mut c = (data.len() as u32).to_be_bytes().to_vec();
+    c.extend(kind);
+    c.extend(data);
+    c.extend((!crc).to_be_bytes());
+    c
+}
+
+/// A PNG whose header claims `w` x `h` RGB pixels, followed by a few bytes
+/// of image data: a decoder that trusted the header would allocate it all.
+fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(png_chunk(b"IHDR", &ihdr));
+    // A stored zlib block of 100 zero bytes.
+    let mut idat = vec![0x78, 0x01, 1, 100, 0, !100u8, 0xff];
+    idat.extend([0u8; 100]);
+    png.extend(png_chunk(b"IDAT", &idat));
+    png.extend(png_chunk(b"IEND", b""));
+    png
+}
+
+/// A real JPEG whose frame header (SOF0) is rewritten to claim `w` x `h`
+/// (a JPEG cannot say more than 65535 a side).
+fn jpeg_claiming(w: u16, h: u16) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    image::RgbImage::from_pixel(16, 16, image::Rgb([90, 40, 30]))
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+    let sof = bytes.windows(2).position(|m| m == [0xff, 0xc0]).unwrap();
+    bytes[sof + 5..sof + 7].copy_from_slice(&h.to_be_bytes());
+    bytes[sof + 7..sof + 9].copy_from_slice(&w.to_be_bytes());
+    bytes
+}
+
+#[test]
+fn bad_exemplar_images_are_refused_clearly_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let g = gravel.to_str().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+
+    let whole = std::fs::read(&gravel).unwrap();
+    std::fs::write(d("truncated.png"), &whole[..whole.len() / 3]).unwrap();
+    std::fs::write(d("huge.png"), png_claiming(100_000, 100_000)).unwrap();
+    std::fs::write(d("huge.jpg"), jpeg_claiming(65_000, 65_000)).unwrap();
+    // Within the side limit, but not within a 256 MiB memory limit.
+    std::fs::write(d("large.png"), png_claiming(16_384, 16_384)).unwrap();
+    image::RgbImage::from_pixel(1, 1, image::Rgb([200, 90, 80]))
+        .save(d("one.png"))
+        .unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 90, 80]))
+        .save(d("two.png"))
+        .unwrap();
+    image::GrayImage::new(512, 512)
+        .save(d("black_mask.png"))
+        .unwrap();
+    image::GrayImage::new(10, 10)
+        .save(d("small_mask.png"))
+        .unwrap();
+
+    let synth = |src: &Path, extra: &[&str]| {
+        let mut a = vec!["synth".to_string(), s(src), "--size".into(), "64".into()];
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a.extend(["-o".into(), s(&d("out.png"))]);
+        a
+    };
+    let synth3d = |src: &Path, extra: &[&str]| {
+        let mut a = vec!["synth3d".to_string(), s(src), "--size".into(), "32".into()];
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a.extend(["-o".into(), s(&d("out.nrrd"))]);
+        a
+    };
+    let black = s(&d("black_mask.png"));
+    let small = s(&d("small_mask.png"));
+    let huge_mask = s(&d("huge.png"));
+    // (case, memory limit, the file the error names, message, arguments).
+    type Refused<'a> = (&'a str, Option<&'a str>, PathBuf, &'a str, Vec<String>);
+    let cases: Vec<Refused> = vec![
+        (
+            "truncated PNG",
+            None,
+            d("truncated.png"),
+            "cannot read the image: unexpected end of file",
+            synth(&d("truncated.png"), &[]),
+        ),
+        (
+            "PNG claiming 100000 x 100000",
+            None,
+            d("huge.png"),
+            "the image is 100000x100000 pixels; organtex reads images of at most 16384 pixels a side",
+            synth(&d("huge.png"), &[]),
+        ),
+        (
+            "JPEG claiming 65000 x 65000",
+            None,
+            d("huge.jpg"),
+            "the image is 65000x65000 pixels; organtex reads images of at most 16384 pixels a side",
+            synth(&d("huge.jpg"), &[]),
+        ),
+        (
+            "mask claiming 100000 x 100000",
+            None,
+            d("huge.png"),
+            "the image is 100000x100000 pixels",
+            synth(&gravel, &["--mask", &huge_mask]),
+        ),
+        (
+            "16384 x 16384 PNG beyond the memory limit",
+            Some("256M"),
+            d("large.png"),
+            "decoding this 16384x16384 image needs about 3.0 GiB, this machine has 0.25 GiB available (capped by ORGANTEX_MEMORY_LIMIT)",
+            synth(&d("large.png"), &[]),
+        ),
+        (
+            "1 x 1 exemplar",
+            None,
+            d("one.png"),
+            "the exemplar is 1x1 pixels (after any crop), smaller than one 7x7 neighbourhood: it needs at least 7x7 pixels",
+            synth(&d("one.png"), &[]),
+        ),
+        (
+            "1 x 1 crop",
+            None,
+            gravel.clone(),
+            "the exemplar is 1x1 pixels (after any crop)",
+            synth(&gravel, &["--crop", "5,5,1,1"]),
+        ),
+        (
+            "1 x 1 exemplar in 3D",
+            None,
+            d("one.png"),
+            "the exemplar is 1x1 pixels (after any crop), smaller than one 5x5 neighbourhood",
+            synth3d(&d("one.png"), &[]),
+        ),
+        (
+            "2 x 2 exemplar in 3D",
+            None,
+            d("two.png"),
+            "the exemplar is 2x2 pixels",
+            synth3d(&d("two.png"), &[]),
+        ),
+        (
+            "1 x 1 exemplar for the quality figures",
+            None,
+            d("one.png"),
+            "the exemplar is 1x1 pixels",
+            vec!["synth-quality".into(), s(&d("one.png")), g.into()],
+        ),
+        (
+            "mask hiding everything in 3D",
+            None,
+            d("black_mask.png"),
+            "the mask hides every pixel",
+            synth3d(&gravel, &["--mask", &black]),
+        ),
+        (
+            "mask of another size in 3D",
+            None,
+            d("small_mask.png"),
+            "the mask is 10x10 but the image",
+            synth3d(&gravel, &["--mask", &small]),
+        ),
+    ];
+    for (name, limit, file, expect, args) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        check_refused_bounded(limit, name, &file, expect, &args);
+    }
+    assert!(!d("out.png").exists() && !d("out.nrrd").exists());
+}
+
+/// 16-bit and grey-alpha PNGs are converted: 16-bit channels to their
+/// 8-bit value, grey to equal RGB, alpha below half masking the pixel.
+#[test]
+fn sixteen_bit_and_grey_alpha_exemplars_are_converted() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (32u32, 32u32);
+    // Left half one colour, right half another; 16-bit values are exact
+    // multiples of 257, so each maps to one 8-bit value.
+    let left = |x: u32| x < w / 2;
+    let rgb16 = image::ImageBuffer::from_fn(w, h, |x, _| {
+        image::Rgb(if left(x) {
+            [200 * 257, 30 * 257, 60 * 257]
+        } else {
+            [20 * 257, 120 * 257, 240 * 257]
+        })
+    });
+    let grey16 = image::ImageBuffer::from_fn(w, h, |x, _| {
+        image::Luma([if left(x) { 40 * 257 } else { 220 * 257 }])
+    });
+    // Alpha hides the right half: only the left half's colour may appear.
+    let la8 = image::ImageBuffer::from_fn(w, h, |x, _| {
+        image::LumaA(if left(x) { [50u8, 255] } else { [200, 0] })
+    });
+    let la16 = image::ImageBuffer::from_fn(w, h, |x, _| {
+        image::LumaA(if left(x) {
+            [90 * 257, 65535]
+        } else {
+            [10 * 257, 0u16]
+        })
+    });
+    let rgba16 = image::ImageBuffer::from_fn(w, h, |x, _| {
+        image::Rgba(if left(x) {
+            [10 * 257, 100 * 257, 200 * 257, 65535u16]
+        } else {
+            [255 * 257, 0, 0, 100]
+        })
+    });
+    let cases: Vec<(&str, image::DynamicImage, Vec<[u8; 3]>)> = vec![
+        (
+            "rgb16",
+            image::DynamicImage::ImageRgb16(rgb16),
+            vec![[200, 30, 60], [20, 120, 240]],
+        ),
+        (
+            "grey16",
+            image::DynamicImage::ImageLuma16(grey16),
+            vec![[40; 3], [220; 3]],
+        ),
+        (
+            "grey_alpha8",
+            image::DynamicImage::ImageLumaA8(la8),
+            vec![[50; 3]],
+        ),
+        (
+            "grey_alpha16",
+            image::DynamicImage::ImageLumaA16(la16),
+            vec![[90; 3]],
+        ),
+        (
+            "rgba16",
+            image::DynamicImage::ImageRgba16(rgba16),
+            vec![[10, 100, 200]],
+        ),
+    ];
+    for (name, img, colours) in cases {
+        let src = dir.path().join(format!("{name}.png"));
+        img.save(&src).unwrap();
+        let out = dir.path().join(format!("{name}_out.png"));
+        let (ok, _, stderr) = organtex(&[
+            "synth",
+            src.to_str().unwrap(),
+            "--size",
+            "48",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{name}: {stderr}");
+        let result = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(result.dimensions(), (48, 48));
+        for c in &colours {
+            assert!(
+                result.pixels().any(|p| p.0 == *c),
+                "{name}: colour {c:?} missing"
+            );
+        }
+        let stray = result.pixels().find(|p| !colours.contains(&p.0));
+        assert!(stray.is_none(), "{name}: unexpected colour {stray:?}");
+    }
+}
+
+#[test]
+fn out_of_range_numbers_on_the_command_line_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let gravel = data.join("database/sources/gravel.png");
+    let cube = data.join("tests/data/cube.obj");
+    let scene = data.join("scenes/bunny.toml");
+    let (g, c, sc) = (
+        gravel.to_str().unwrap(),
+        cube.to_str().unwrap(),
+        scene.to_str().unwrap(),
+    );
+    let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let (png, nrrd, obj, bake_dir) = (out("o.png"), out("o.nrrd"), out("o.obj"), out("baked"));
+    let block = dir.path().join("b.nrrd");
+    organtex::synth::volume::Volume {
+        size: [2, 2, 2],
+        spacing: 0.25,
+        voxels: vec![[200, 40, 60]; 8],
+    }
+    .write_nrrd(&block)
+    .unwrap();
+    let b = block.to_str().unwrap();
+    let section = |extra: &[&str]| {
+        let mut a = vec!["section", c, "--block", b, "--plane", "0,0,1,0", "-o"];
+        a.push(&png);
+        a.extend(extra);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let mut cases: Vec<(Vec<String>, &str)> = Vec::new();
+    for v in ["nan", "inf", "0", "-1"] {
+        cases.push((
+            section(&["--scale", v]),
+            "--scale must be a positive scale (object units per voxel), not",
+        ));
+    }
+    for v in ["0", "16385", "-4", "nan"] {
+        cases.push((section(&["--resolution", v]), "invalid value"));
+    }
+    let args = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    for v in ["0", "0x64", "16385x64"] {
+        cases.push((
+            args(&["synth", g, "--size", v, "-o", &png]),
+            "outside 1..16384 pixels a side",
+        ));
+    }
+    for v in ["-5", "nan", "inf", "64xnan"] {
+        cases.push((
+            args(&["synth", g, "--size", v, "-o", &png]),
+            "is not WIDTHxHEIGHT",
+        ));
+    }
+    for v in ["0", "17", "x"] {
+        cases.push((
+            args(&["synth", g, "--size", "64", "--levels", v, "-o", &png]),
+            "is not a number of levels from 1 to 16",
+        ));
+    }
+    for v in ["nan", "-1", "inf"] {
+        cases.push((
+            args(&["synth", g, "--size", "64", "--occurrence", v, "-o", &png]),
+            "the occurrence weight must be from 0 to 10",
+        ));
+    }
+    for v in ["0", "3", "300"] {
+        cases.push((
+            args(&["synth3d", g, "--size", v, "-o", &nrrd]),
+            "the block size must be from 5 (the neighbourhood) to 256 voxels",
+        ));
+    }
+    cases.push((
+        args(&["synth3d", g, "--size", "-8", "-o", &nrrd]),
+        "invalid value",
+    ));
+    for v in ["nan", "inf", "0", "-1"] {
+        cases.push((
+            args(&["synth3d", g, "--size", "16", "--spacing", v, "-o", &nrrd]),
+            "--spacing must be a positive number",
+        ));
+    }
+    for v in ["0", "17", "-64", "nan", "99999"] {
+        cases.push((
+            args(&["bake", sc, "-o", &bake_dir, "--atlas", v]),
+            "invalid value",
+        ));
+    }
+    for v in ["nan", "inf", "-1", "100"] {
+        cases.push((
+            args(&["generate", "uterus", "-o", &obj, "--wall-thickness", v]),
+            "--wall-thickness: must be from 0 to the cavity's depth and width (16), not",
+        ));
+    }
+    for v in ["nan", "inf", "-1", "0"] {
+        cases.push((
+            args(&["unwrap", c, "-o", &obj, "--max-stretch", v]),
+            "--max-stretch must be a positive number",
+        ));
+        cases.push((
+            args(&["unwrap", c, "-o", &obj, "--max-conformal", v]),
+            "--max-conformal must be a number of at least 1",
+        ));
+    }
+    for (args, expect) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        check_arg_refused(&args, expect);
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["b.nrrd"], "nothing written");
+}
+
+#[test]
+fn out_of_range_numbers_in_a_scene_are_refused_at_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    std::fs::write(
+        dir.path().join("organ.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene = dir.path().join("scene.toml");
+    let out = dir.path().join("out");
+    // Line 2: [[camera]]; line 6: [[node]]; line 9: [[node.facet]] whose
+    // texture is line 11; line 12: [node.interior]; line 15: [bake].
+    let base = format!(
+        "database = {database:?}\n[[camera]]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+         fov = 60.0\n[[node]]\nname = \"organ\"\nmesh = {{ file = \"organ.obj\" }}\n[[node.facet]]\n\
+         name = \"*\"\ntexture = \"gravel\"\n[node.interior]\ntexture = \"gravel\"\nblock_size = 5.0\n\
+         [bake]\nviews = 8\ninterior_voxels = 16\n"
+    );
+    let facet = |key: &str, v: &str| {
+        base.replace(
+            "texture = \"gravel\"\n[node",
+            &format!("texture = \"gravel\"\n{key} = {v}\n[node"),
+        )
+    };
+    let mut cases: Vec<(String, String)> = Vec::new();
+    for v in ["nan", "inf", "0.0", "-1.0"] {
+        for key in ["tile_size", "overlay_tile_size", "max_stretch"] {
+            cases.push((
+                facet(key, v),
+                format!("line 12: node 'organ': facet '*' {key}: must be a positive number, not"),
+            ));
+        }
+        cases.push((
+            base.replace("block_size = 5.0", &format!("block_size = {v}")),
+            "line 12: node 'organ': interior block_size: must be a positive number of mesh units, not".into(),
+        ));
+    }
+    for v in ["nan", "inf", "-inf"] {
+        cases.push((
+            facet("rotation", v),
+            "facet '*' rotation: must be a finite number of degrees, not".into(),
+        ));
+        cases.push((
+            facet("offset", &format!("[0.0, {v}]")),
+            "facet '*' offset: must be two finite numbers, not".into(),
+        ));
+        cases.push((
+            facet("overlap", v),
+            "facet '*' overlap: must be 0 or more, not".into(),
+        ));
+        cases.push((
+            facet("bump", v),
+            "facet '*' bump: must be from 0 to 10, not".into(),
+        ));
+        cases.push((
+            base.replace(
+                "position = [0.0, 0.0, 5.0]",
+                &format!("position = [0.0, {v}, 5.0]"),
+            ),
+            "line 2: camera: position and look_at must be finite numbers".into(),
+        ));
+        cases.push((
+            base.replace(
+                "look_at = [0.0, 0.0, 0.0]",
+                &format!("look_at = [{v}, 0.0, 0.0]"),
+            ),
+            "line 2: camera: position and look_at must be finite numbers".into(),
+        ));
+    }
+    for v in ["nan", "0.0", "-60.0", "inf"] {
+        cases.push((
+            base.replace("fov = 60.0", &format!("fov = {v}")),
+            "line 2: camera at [0.0, 0.0, 5.0]: fov must be from 1 to 170 degrees".into(),
+        ));
+    }
+    for v in ["0", "5000"] {
+        cases.push((
+            base.replace("views = 8", &format!("views = {v}")),
+            format!("line 16: [bake] views: must be from 1 to 1024, not {v}"),
+        ));
+    }
+    for v in ["0", "8", "512"] {
+        cases.push((
+            base.replace("interior_voxels = 16", &format!("interior_voxels = {v}")),
+            format!("line 17: [bake] interior_voxels: {v} is not a multiple of 16 from 16 to 256"),
+        ));
+    }
+    cases.push((
+        base.replace("views = 8", "views = -1"),
+        "line 16: invalid value: integer `-1`".into(),
+    ));
+    // A generated organ's numbers.
+    let cavity = |params: &str| {
+        base.replace(
+            "mesh = { file = \"organ.obj\" }",
+            &format!("mesh = {{ uterine_cavity = {{ {params} }} }}"),
+        )
+    };
+    for v in ["nan", "inf", "0.0", "-1.0"] {
+        for key in ["length", "width", "depth", "cervix_radius"] {
+            cases.push((
+                cavity(&format!("{key} = {v}")),
+                format!("line 8: node 'organ': mesh.uterine_cavity.{key}: must be a positive number, not"),
+            ));
+        }
+        for key in ["radius", "height"] {
+            cases.push((
+                cavity(&if key == "radius" {
+                    format!("myoma = [{{ at = [0.2, 0.5], radius = {v}, height = 2.0 }}]")
+                } else {
+                    format!("myoma = [{{ at = [0.2, 0.5], radius = 3.0, height = {v} }}]")
+                }),
+                format!("line 8: node 'organ': mesh.uterine_cavity.myoma[0].{key}: must be a positive number, not"),
+            ));
+        }
+    }
+    for key in ["length", "width", "depth"] {
+        cases.push((
+            cavity(&format!("{key} = 1e300")),
+            format!("mesh.uterine_cavity.{key}: must be at most 1000000, not 1000"),
+        ));
+    }
+    cases.push((
+        cavity("polyp = [{ at = [0.5, 0.9], stalk_radius = 0.5, stalk_length = 1e200, head_radius = 1.0 }]"),
+        "mesh.uterine_cavity.polyp[0].stalk_length: must be at most 1000000".into(),
+    ));
+    for v in ["nan", "inf", "-1.0"] {
+        cases.push((
+            cavity(&format!("wall_thickness = {v}")),
+            "mesh.uterine_cavity.wall_thickness: must be from 0 to the cavity's depth and width"
+                .into(),
+        ));
+    }
+    let s = scene.to_str().unwrap();
+    for (text, expect) in &cases {
+        std::fs::write(&scene, text).unwrap();
+        check_refused(
+            expect,
+            &scene,
+            expect,
+            &["bake", s, "-o", out.to_str().unwrap()],
+        );
+    }
+    assert!(!out.exists(), "a refused bake created its output folder");
+}
+
+#[test]
+fn a_cycle_of_includes_through_two_files_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    let (a, b) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+    std::fs::write(
+        dir.path().join("organ.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        &a,
+        format!("database = {database:?}\ninclude = [\"b.toml\"]\n[[node]]\nname = \"organ\"\nmesh = {{ file = \"organ.obj\" }}\n"),
+    )
+    .unwrap();
+    std::fs::write(&b, "# included by a\ninclude = [\"a.toml\"]\n").unwrap();
+    let out = dir.path().join("out");
+    let chain = format!(
+        "{} -> {} -> {}",
+        a.canonicalize().unwrap().display(),
+        b.canonicalize().unwrap().display(),
+        a.canonicalize().unwrap().display()
+    );
+    check_refused(
+        "two-file include cycle",
+        &b,
+        &format!("line 2: include: the includes form a cycle ({chain})"),
+        &["bake", a.to_str().unwrap(), "-o", out.to_str().unwrap()],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn bad_nrrd_blocks_are_refused_clearly_and_slicer_files_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj");
+    let voxels: Vec<u8> = (0..8).flat_map(|i| [200, 40 + 20 * i as u8, 60]).collect();
+    // What 3D Slicer writes: gzip, endian, space and space directions.
+    let header = |encoding: &str, sizes: &str, extra: &str| {
+        format!(
+            "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n\
+             type: unsigned char\ndimension: 4\nspace: left-posterior-superior\nsizes: {sizes}\n\
+             space directions: none (0.25,0,0) (0,0.25,0) (0,0,0.25)\nkinds: RGB-color domain domain domain\n\
+             endian: little\nencoding: {encoding}\nspace origin: (0,0,0)\n{extra}"
+        )
+    };
+    let gzip = |bytes: &[u8]| {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        e.write_all(bytes).unwrap();
+        e.finish().unwrap()
+    };
+    let attached = |name: &str, head: String, data: &[u8]| {
+        let mut bytes = head.into_bytes();
+        bytes.extend(b"\n");
+        bytes.extend(data);
+        std::fs::write(d(name), bytes).unwrap();
+    };
+    attached("slicer.nrrd", header("gzip", "3 2 2 2", ""), &gzip(&voxels));
+    std::fs::write(d("block.raw.gz"), gzip(&voxels)).unwrap();
+    std::fs::write(
+        d("detached.nhdr"),
+        header("gzip", "3 2 2 2", "data file: block.raw.gz\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        d("missing.nhdr"),
+        header("raw", "3 2 2 2", "data file: nowhere.raw\n"),
+    )
+    .unwrap();
+    attached("sizes.nrrd", header("raw", "3 2 two 2", ""), &voxels);
+    attached("short_sizes.nrrd", header("raw", "3 2 2", ""), &voxels);
+    attached(
+        "float.nrrd",
+        header("raw", "3 2 2 2", "").replace("unsigned char", "float"),
+        &voxels,
+    );
+    attached("bzip2.nrrd", header("bzip2", "3 2 2 2", ""), &voxels);
+    attached(
+        "gzip_short.nrrd",
+        header("gzip", "3 2 2 2", ""),
+        &gzip(&voxels[..20]),
+    );
+    attached(
+        "gzip_bad.nrrd",
+        header("gzip", "3 2 2 2", ""),
+        b"not compressed",
+    );
+    // Item 6: a tiny gzip stream whose header claims 4096^3 voxels.
+    attached(
+        "gzip_huge.nrrd",
+        header("gzip", "3 4096 4096 4096", ""),
+        &gzip(&voxels),
+    );
+
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out = d("cut.png");
+    let run = |nrrd: &Path| {
+        vec![
+            "section".to_string(),
+            s(&cube),
+            "--block".into(),
+            s(nrrd),
+            "--plane".into(),
+            "0,0,1,0".into(),
+            "-o".into(),
+            s(&out),
+        ]
+    };
+    let cases: Vec<(&str, Option<&str>, &str, &str)> = vec![
+        (
+            "wrong sizes line",
+            None,
+            "sizes.nrrd",
+            "header line 7: bad sizes '3 2 two 2': expected whole numbers",
+        ),
+        (
+            "three sizes",
+            None,
+            "short_sizes.nrrd",
+            "expected an RGB volume (dimension 4, sizes 3 X Y Z), found dimension 4, sizes [3, 2, 2]",
+        ),
+        (
+            "unsupported type",
+            None,
+            "float.nrrd",
+            "type 'float' is not supported; uint8 is",
+        ),
+        (
+            "unsupported encoding",
+            None,
+            "bzip2.nrrd",
+            "encoding 'bzip2' is not supported; raw and gzip are",
+        ),
+        (
+            "missing detached data file",
+            None,
+            "missing.nhdr",
+            "nowhere.raw: cannot be opened: No such file or directory",
+        ),
+        (
+            "gzip data too short",
+            None,
+            "gzip_short.nrrd",
+            "the gzip data holds 20 bytes of voxel data where sizes [2, 2, 2] need 24",
+        ),
+        (
+            "corrupt gzip data",
+            None,
+            "gzip_bad.nrrd",
+            "the gzip data cannot be decompressed",
+        ),
+        (
+            "gzip header claiming 4096^3 voxels",
+            Some("4G"),
+            "gzip_huge.nrrd",
+            "a 4096x4096x4096 volume needs about 384 GiB, this machine has 4.0 GiB available (capped by ORGANTEX_MEMORY_LIMIT)",
+        ),
+    ];
+    for (name, limit, file, expect) in cases {
+        let args = run(&d(file));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        check_refused_bounded(limit, name, &d(file), expect, &args);
+    }
+    assert!(!out.exists());
+    // Without a cap the same file is refused by what the machine has
+    // (MemAvailable), on any machine with less than 384 GiB free.
+    let args = run(&d("gzip_huge.nrrd"));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (ok, _, stderr) = organtex_bounded(None, &args);
+    assert!(
+        !ok && stderr.contains("a 4096x4096x4096 volume needs about 384 GiB, this machine has"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("capped") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+
+    // Slicer's attached gzip and a detached gzip file both cut.
+    for file in ["slicer.nrrd", "detached.nhdr"] {
+        let args = run(&d(file));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (ok, _, stderr) = organtex(&args);
+        assert!(ok, "{file}: {stderr}");
+        let cut = image::open(&out).unwrap().to_rgba8();
+        assert!(cut.pixels().any(|p| p[3] == 255 && p[0] == 200), "{file}");
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
+/// Item 6 of issue 20: sizes that would not fit are refused before the
+/// allocation, with the estimate, under an 8 GiB address-space cap.
+#[test]
+fn work_too_large_for_memory_is_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name);
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let g = gravel.to_str().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+
+    let ply = |format: &str, vertices: &str, faces: &str, body: &[u8]| {
+        let mut b = format!(
+            "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+        .into_bytes();
+        b.extend(body);
+        b
+    };
+    std::fs::write(
+        d("v31.ply"),
+        ply("binary_little_endian", "2147483648", "1", &[0; 4]),
+    )
+    .unwrap();
+    std::fs::write(d("v31a.ply"), ply("ascii", "2147483648", "1", b"0 0 0\n")).unwrap();
+    std::fs::write(
+        d("f31.ply"),
+        ply("binary_little_endian", "3", "2147483647", &[0; 36]),
+    )
+    .unwrap();
+    std::fs::write(d("t31.stl"), binary_stl_claiming(1 << 31, 1)).unwrap();
+    let mesh_cases = [
+        ("v31.ply", "the header declares 2147483648 vertex elements"),
+        ("v31a.ply", "the header declares 2147483648 vertex elements"),
+        ("f31.ply", "the header declares 2147483647 face elements"),
+        ("t31.stl", "declares 2147483648 triangles"),
+    ];
+    for (file, expect) in mesh_cases {
+        check_refused_bounded(None, file, &d(file), expect, &["info", &s(&d(file))]);
+    }
+
+    // Generated work, under a memory cap so the case does not depend on
+    // the machine.
+    let capped = |args: &[&str], expect: &str| {
+        let (ok, stdout, stderr) = organtex_bounded(Some("60M"), args);
+        assert!(!ok, "{args:?}: exit code 0\n{stdout}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains(expect),
+            "{args:?}: expected `{expect}` in:\n{stderr}"
+        );
+        assert!(
+            stderr.contains(
+                "GiB, this machine has 0.06 GiB available (capped by ORGANTEX_MEMORY_LIMIT)"
+            ),
+            "{stderr}"
+        );
+    };
+    let nrrd = s(&d("b.nrrd"));
+    capped(
+        &["synth3d", g, "--size", "256", "-o", &nrrd],
+        "synthesising a 256x256x256 block (--size) needs about 0.42 GiB",
+    );
+    capped(
+        &[
+            "synth3d", g, "--size", "128", "--method", "optimize", "-o", &nrrd,
+        ],
+        "synthesising a 128x128x128 block (--size) needs about 0.13 GiB",
+    );
+    let png = s(&d("t.png"));
+    capped(
+        &["synth", g, "--size", "4000", "-o", &png],
+        "synthesising a 4000x4000 texture (--size) needs about 0.54 GiB",
+    );
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
+    capped(
+        &[
+            "bake",
+            scene.to_str().unwrap(),
+            "-o",
+            &s(&d("out")),
+            "--atlas",
+            "8000",
+        ],
+        "--atlas 8000 (one facet's 8000x8000 atlas) needs about 0.83 GiB",
+    );
+    let block = d("block.nrrd");
+    organtex::synth::volume::Volume {
+        size: [2, 2, 2],
+        spacing: 0.25,
+        voxels: vec![[200, 40, 60]; 8],
+    }
+    .write_nrrd(&block)
+    .unwrap();
+    let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj");
+    capped(
+        &[
+            "section",
+            cube.to_str().unwrap(),
+            "--block",
+            &s(&block),
+            "--plane",
+            "0,0,1,0",
+            "--resolution",
+            "4096",
+            "-o",
+            &png,
+        ],
+        "section image (--resolution) needs about 0.2",
+    );
+
+    // A scene's interior blocks, refused when the scene is read.
+    let database = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database");
+    std::fs::write(d("organ.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let scene = d("big.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "database = {database:?}\n[[node]]\nname = \"organ\"\nmesh = {{ file = \"organ.obj\" }}\n\
+             [node.interior]\ntexture = \"gravel\"\nmethod = \"optimize\"\n[bake]\ninterior_voxels = 256\n"
+        ),
+    )
+    .unwrap();
+    check_refused_bounded(
+        Some("512M"),
+        "interior blocks",
+        &scene,
+        "[bake] interior_voxels: synthesising 1 interior block of 256^3 voxels needs about 1.1 GiB, this machine has 0.50 GiB available",
+        &["bake", &s(&scene), "-o", &s(&d("out"))],
+    );
+    // A database entry's texture size.
+    let db = d("db");
+    std::fs::create_dir(&db).unwrap();
+    std::fs::copy(&gravel, db.join("gravel.png")).unwrap();
+    let index = db.join("index.toml");
+    std::fs::write(
+        &index,
+        "[[tissue]]\nid = \"g\"\nname = \"G\"\nkind = \"x\"\nsource = \"gravel.png\"\noutputs = [\"colour\"]\n\
+         [tissue.synthesis]\nwidth = 16384\nheight = 16384\n",
+    )
+    .unwrap();
+    check_refused_bounded(
+        Some("1G"),
+        "database texture",
+        &index,
+        "tissue 'g': a 16384x16384 texture needs about 9.0 GiB, this machine has 1.0 GiB available",
+        &["db", "--database", &s(&db), "build"],
+    );
+    assert!(!db.join("build").exists(), "nothing built");
+    let (ok, _, stderr) = organtex_bounded(Some("lots"), &["synth", g, "--size", "64", "-o", &png]);
+    assert!(
+        !ok && stderr.contains("ORGANTEX_MEMORY_LIMIT='lots' is not a size such as 512M or 4G"),
+        "{stderr}"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.ends_with(".ply") && !n.ends_with(".stl") && !n.ends_with(".obj"))
+        .collect();
+    let mut left = left;
+    left.sort();
+    assert_eq!(left, ["big.toml", "block.nrrd", "db"], "nothing written");
+}

@@ -21,11 +21,21 @@ pub struct Args {
     /// texel density across the scene, the widest facet's longer side SIZE
     /// texels, each atlas as wide and tall as its charts. Without it, the .glb holds tiled tissue textures with
     /// KHR_texture_transform and blended layers with vertex alpha.
-    #[arg(long, value_name = "SIZE", value_parser = clap::value_parser!(u32).range(64..=16384))]
+    #[arg(long, value_name = "SIZE", allow_negative_numbers = true,
+          value_parser = clap::value_parser!(u32).range(64..=16384))]
     atlas: Option<u32>,
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(size) = args.atlas {
+        // At least the widest facet's atlas, blended and unblended, and its
+        // per-texel search buffer: 14 bytes a texel.
+        let side = size as u64;
+        organtex::memory::ensure_fits(
+            &format!("--atlas {size} (one facet's {size}x{size} atlas)"),
+            organtex::memory::product(&[side, side, 14]),
+        )?;
+    }
     bake_and_print(&args.scene, &args.output, args.atlas.map(|s| s as usize))
 }
 
@@ -107,7 +117,9 @@ fn print(baked: &Baked) {
         println!(
             "  note: the atlases hold {density:.1} texels per unit, the finest tissue texture {:.1}: it is blurred (--atlas {} keeps its detail)",
             r.texture_density,
-            (size as usize).next_power_of_two()
+            // Within what --atlas accepts (and no overflow when density is
+            // tiny).
+            (size as usize).clamp(64, 16384).next_power_of_two()
         );
     }
     println!("wrote {}", baked.glb.display());

@@ -73,6 +73,7 @@ pub fn run(args: Args) -> Result<()> {
             "threads": rayon::current_num_threads(),
             "workloads": results,
         });
+        // Plain numbers and string keys: serialising cannot fail.
         println!(
             "{}",
             serde_json::to_string_pretty(&out).expect("timings serialise")

@@ -35,7 +35,7 @@ pub struct Args {
     /// Uterus: the wall's thickness. With it the mesh is the uterine wall as
     /// a closed solid (cavity inside, facet "serosa" outside), which
     /// `organtex section` can cut; without it, the open cavity alone.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     wall_thickness: f64,
 }
 

@@ -35,6 +35,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let report = &analysis.report;
     if args.json {
+        // Plain numbers and string keys: serialising cannot fail, and a
+        // struct becomes an object, so indexing by key inserts, never panics.
         let mut value = serde_json::to_value(report).expect("the report serialises");
         value["file"] = serde_json::Value::String(args.file.display().to_string());
         println!(
@@ -51,6 +53,7 @@ fn write_curvature_csv(path: &Path, a: &Analysis) -> Result<()> {
     let c = &a.curvature;
     organtex::atomic::write_file(path, |w: &mut dyn Write| {
         writeln!(w, "vertex,angle_defect,mixed_area,gaussian,mean")?;
+        // The curvature arrays hold one value per vertex of this mesh.
         for v in 0..a.mesh.num_vertices() {
             writeln!(
                 w,

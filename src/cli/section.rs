@@ -7,7 +7,7 @@ use glam::DVec3;
 use organtex::mesh::{Topology, io};
 use organtex::solid::{Placement, Plane, plane_section, render_section, section_glb};
 use organtex::synth::volume::Volume;
-use organtex::{Error, Result};
+use organtex::{Error, Result, memory};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -28,7 +28,7 @@ pub struct Args {
           default_value = "0,0,0")]
     origin: DVec3,
     /// Pixels along the longer side of the section image.
-    #[arg(long, value_name = "PX", default_value_t = 1024,
+    #[arg(long, value_name = "PX", default_value_t = 1024, allow_negative_numbers = true,
           value_parser = clap::value_parser!(u32).range(1..=16384))]
     resolution: u32,
     /// Output: .png (the section drawn in its plane, transparent outside
@@ -77,6 +77,13 @@ pub fn run(args: Args) -> Result<()> {
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
     let volume = Volume::read_nrrd(&args.block)?;
+    if let Some(scale) = args.scale
+        && !(scale.is_finite() && scale > 0.0)
+    {
+        return Err(Error::invalid(format!(
+            "--scale must be a positive scale (object units per voxel), not {scale}"
+        )));
+    }
     let placement = Placement::new(args.origin, args.scale.unwrap_or(volume.spacing))?;
 
     let start = std::time::Instant::now();
@@ -90,12 +97,26 @@ pub fn run(args: Args) -> Result<()> {
         )
         .in_file(&args.mesh));
     }
-    let image = render_section(
-        &section,
-        &volume,
-        &placement,
-        args.resolution as f64 / extent,
-    )?;
+    if !extent.is_finite() {
+        return Err(Error::invalid(format!(
+            "the section spans {extent} units: too wide to draw"
+        ))
+        .in_file(&args.mesh));
+    }
+    let pixels_per_unit = args.resolution as f64 / extent;
+    if let Some((lo, hi)) = section.bounds() {
+        let [w, h] = ((hi - lo) * pixels_per_unit)
+            .ceil()
+            .max(glam::DVec2::ONE)
+            .to_array();
+        // The image, its coverage, the copy handed to the encoder and the
+        // encoded bytes: about 13 bytes a pixel.
+        memory::ensure_fits(
+            &format!("a {w}x{h} section image (--resolution)"),
+            memory::product(&[w as u64, h as u64, 13]),
+        )?;
+    }
+    let image = render_section(&section, &volume, &placement, pixels_per_unit)?;
     if glb {
         let bytes = section_glb(&section, &image)?;
         organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;

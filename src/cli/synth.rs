@@ -2,9 +2,9 @@
 
 use std::path::PathBuf;
 
-use organtex::Result;
 use organtex::synth::exemplar::{Crop, Exemplar};
 use organtex::synth::fnpts::{SynthOptions, Synthesis, synthesize};
+use organtex::{Result, memory};
 
 use super::progress::Bars;
 
@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
     crop: Option<Crop>,
     /// Output size, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", value_parser = parse_size, allow_negative_numbers = true)]
     size: (usize, usize),
     /// Make the output tile: it wraps around seamlessly.
     #[arg(long)]
@@ -32,14 +32,14 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     iterations: usize,
     /// Pyramid levels (default: as many as keep 32 pixels a side).
-    #[arg(long)]
+    #[arg(long, value_parser = levels_in_range)]
     levels: Option<usize>,
     /// Side of the square neighbourhood compared (odd).
     #[arg(long, default_value_t = 7)]
     neighbourhood: usize,
     /// Weight of the occurrence cost, which spreads copies over the whole
     /// exemplar (0: the paper's cost alone).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Output PNG.
     #[arg(short, long)]
@@ -64,6 +64,16 @@ fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
     }
 }
 
+/// Pyramid levels, 1 to 16 (each halves the exemplar: 16 would already
+/// need one 7 x 2^15 pixels a side).
+pub(super) fn levels_in_range(s: &str) -> std::result::Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .ok()
+        .filter(|l| (1..=16).contains(l))
+        .ok_or_else(|| format!("'{s}' is not a number of levels from 1 to 16"))
+}
+
 pub(super) fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
     let v = super::comma_numbers::<u32>(s, 4, "X,Y,WIDTH,HEIGHT")?;
     Ok(Crop {
@@ -75,7 +85,15 @@ pub(super) fn parse_crop(s: &str) -> std::result::Result<Crop, String> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let (w, h) = args.size;
+    memory::ensure_fits(
+        &format!("synthesising a {w}x{h} texture (--size)"),
+        memory::texture_bytes(w, h),
+    )?;
     let exemplar = Exemplar::load(&args.source, args.mask.as_deref(), args.crop)?;
+    exemplar
+        .check_neighbourhood(args.neighbourhood)
+        .map_err(|e| e.in_file(&args.source))?;
     let opts = SynthOptions {
         width: args.size.0,
         height: args.size.1,
@@ -108,6 +126,8 @@ pub fn run(args: Args) -> Result<()> {
 
 pub fn colour_image(s: &Synthesis) -> image::DynamicImage {
     let raw = s.pixels.iter().flatten().copied().collect();
+    // `synthesize` makes width x height pixels, and the sizes fit u32
+    // (at most 16384 a side), so the buffer always matches.
     image::DynamicImage::ImageRgb8(
         image::RgbImage::from_raw(s.width as u32, s.height as u32, raw)
             .expect("one pixel per entry"),
@@ -120,6 +140,7 @@ fn coords_image(s: &Synthesis) -> image::DynamicImage {
         .iter()
         .flat_map(|c| [c[0] as u16, c[1] as u16, 0])
         .collect();
+    // As in `colour_image`: one coordinate per pixel.
     image::DynamicImage::ImageRgb16(
         image::ImageBuffer::from_raw(s.width as u32, s.height as u32, raw)
             .expect("one pixel per entry"),
@@ -144,6 +165,10 @@ pub struct QualityArgs {
 
 pub fn quality(args: QualityArgs) -> Result<()> {
     let exemplar = Exemplar::load(&args.exemplar, args.mask.as_deref(), args.crop)?;
+    // The figures compare 7 x 7 patches.
+    exemplar
+        .check_neighbourhood(7)
+        .map_err(|e| e.in_file(&args.exemplar))?;
     let texture = organtex::synth::exemplar::read_image(&args.texture)?.to_rgb8();
     let pixels: Vec<[u8; 3]> = texture.pixels().map(|p| p.0).collect();
     let q = organtex::synth::quality::measure(
@@ -154,6 +179,7 @@ pub fn quality(args: QualityArgs) -> Result<()> {
             pixels: &pixels,
         },
     );
+    // Three numbers (NaN and infinity serialise as null): cannot fail.
     println!(
         "{}",
         serde_json::to_string_pretty(&q).expect("figures serialise")

@@ -6,7 +6,7 @@ use organtex::synth::block::{BlockOptions, Method, synthesize_block};
 use organtex::synth::exemplar::{Crop, Exemplar};
 use organtex::synth::quality::measure_block;
 use organtex::synth::volume::Volume;
-use organtex::{Error, Result};
+use organtex::{Error, Result, memory};
 
 use super::progress::Bars;
 use super::synth::parse_crop;
@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
     crop: Option<Crop>,
     /// Voxels a side; a multiple of 2^(levels - 1).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     size: usize,
     #[arg(long, value_enum, default_value = "fnpts")]
     method: MethodArg,
@@ -48,16 +48,16 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     iterations: usize,
     /// Pyramid levels (default: as many as keep 16 voxels a side).
-    #[arg(long)]
+    #[arg(long, value_parser = super::synth::levels_in_range)]
     levels: Option<usize>,
     /// Side of each plane's square neighbourhood (odd).
     #[arg(long, default_value_t = 5)]
     neighbourhood: usize,
     /// Weight of the occurrence cost (FNPTS; 0: the paper's cost alone).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Edge length of a voxel in object units, written to the NRRD.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     spacing: f64,
     /// Output block, NRRD (raw uint8 RGB).
     #[arg(short, long)]
@@ -88,10 +88,25 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut paths = vec![args.source.clone()];
     paths.extend(args.src_y.iter().chain(&args.src_z).cloned());
+    let method = match args.method {
+        MethodArg::Fnpts => Method::Fnpts,
+        MethodArg::Optimize => Method::Optimize,
+    };
+    let n = args.size;
+    memory::ensure_fits(
+        &format!("synthesising a {n}x{n}x{n} block (--size)"),
+        memory::block_bytes(n, paths.len(), method),
+    )?;
     let exemplars = paths
         .iter()
-        .map(|p| Exemplar::load(p, args.mask.as_deref(), args.crop))
+        .map(|p| {
+            let e = Exemplar::load(p, args.mask.as_deref(), args.crop)?;
+            e.check_neighbourhood(args.neighbourhood)
+                .map_err(|err| err.in_file(p))?;
+            Ok(e)
+        })
         .collect::<Result<Vec<_>>>()?;
+    // `paths` starts with SOURCE, so there is always a first exemplar.
     for (p, e) in paths.iter().zip(&exemplars).skip(1) {
         let first = &exemplars[0];
         if (e.width, e.height) != (first.width, first.height) {
@@ -113,10 +128,7 @@ pub fn run(args: Args) -> Result<()> {
         levels: args.levels,
         neighbourhood: args.neighbourhood,
         occurrence: args.occurrence,
-        method: match args.method {
-            MethodArg::Fnpts => Method::Fnpts,
-            MethodArg::Optimize => Method::Optimize,
-        },
+        method,
     };
     let bars = Bars::new();
     let start = std::time::Instant::now();

@@ -39,12 +39,14 @@ pub struct Args {
     cameras: Option<PathBuf>,
     /// Refine the seams until the mean |log area ratio| of the flattening is
     /// at most this (0 would be no area distortion at all).
-    #[arg(long, default_value_t = SeamOptions::default().max_stretch, value_name = "X")]
+    #[arg(long, default_value_t = SeamOptions::default().max_stretch, value_name = "X",
+          allow_negative_numbers = true)]
     max_stretch: f64,
     /// Refine the seams until the flattening's mean ratio of largest to
     /// smallest stretch is at most this too (1 would be perfectly
     /// conformal).
-    #[arg(long, default_value_t = SeamOptions::default().max_conformal, value_name = "X")]
+    #[arg(long, default_value_t = SeamOptions::default().max_conformal, value_name = "X",
+          allow_negative_numbers = true)]
     max_conformal: f64,
     /// Split non-manifold edges and vertices first instead of refusing the
     /// mesh.
@@ -91,6 +93,7 @@ pub fn run(args: Args) -> Result<()> {
     bars.finish();
 
     io::write_obj(&args.output, &result.mesh, None)?;
+    // Plain numbers and string keys: serialising cannot fail.
     let report = serde_json::to_string_pretty(&result.report).expect("the report serialises");
     if let Some(path) = &args.report {
         organtex::atomic::write_file(path, |w| writeln!(w, "{report}"))?;

@@ -46,6 +46,7 @@ pub fn run(args: Args) -> Result<()> {
             "the mesh has no texture coordinates on every face",
         )
     })?;
+    // Plain numbers and string keys: serialising cannot fail.
     println!(
         "{}",
         serde_json::to_string_pretty(&metrics).expect("metrics serialise")

@@ -44,6 +44,7 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
         }
     };
     feed(&RECIPE.to_le_bytes());
+    // Plain fields with string keys: serialising cannot fail.
     feed(serde_json::to_string(t).expect("serialises").as_bytes());
     for file in std::iter::once(&t.source).chain(t.mask.as_ref()) {
         let path = db.root.join(file);
@@ -108,28 +109,44 @@ pub fn build(db: &Database, ids: &[String], progress: &dyn Progress) -> Result<V
 fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built> {
     let start = Instant::now();
     let ex = exemplar(db, t)?;
-    let dir = db.root.join("build").join(&t.id);
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let mut quality = None;
-    if let Some(p) = t
+    // Everything that can be refused is checked, and the synthesis done,
+    // before the entry's folder is made: a refused entry leaves nothing.
+    let synthesised = match t
         .synthesis
         .as_ref()
         .filter(|_| t.outputs.iter().any(|o| *o != Output::Overlay))
     {
-        let opts = SynthOptions {
-            width: p.width,
-            height: p.height,
-            tileable: p.tileable,
-            seed: p.seed,
-            iterations: p.iterations,
-            levels: None,
-            neighbourhood: p.neighbourhood,
-            occurrence: SynthOptions::default().occurrence,
-        };
-        let s =
-            synthesize(&ex, &opts, progress).map_err(|e| e.in_file(&db.root.join(&t.source)))?;
+        Some(p) => {
+            let opts = SynthOptions {
+                width: p.width,
+                height: p.height,
+                tileable: p.tileable,
+                seed: p.seed,
+                iterations: p.iterations,
+                levels: None,
+                neighbourhood: p.neighbourhood,
+                occurrence: SynthOptions::default().occurrence,
+            };
+            let source = db.root.join(&t.source);
+            ex.check_neighbourhood(p.neighbourhood)
+                .map_err(|e| e.in_file(&source))?;
+            crate::memory::ensure_fits(
+                &format!("tissue '{}': a {}x{} texture", t.id, p.width, p.height),
+                crate::memory::texture_bytes(p.width, p.height),
+            )
+            .map_err(|e| e.in_file(&db.root.join("index.toml")))?;
+            Some(synthesize(&ex, &opts, progress).map_err(|e| e.in_file(&source))?)
+        }
+        None => None,
+    };
+    let dir = db.root.join("build").join(&t.id);
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let mut quality = None;
+    if let Some(s) = &synthesised {
         if t.outputs.contains(&Output::Colour) {
             let raw = s.pixels.iter().flatten().copied().collect();
+            // `synthesize` gives width x height pixels, each side at most
+            // 16384: the buffer always fits.
             let img =
                 image::RgbImage::from_raw(s.width as u32, s.height as u32, raw).expect("sized");
             write_png(
@@ -146,7 +163,8 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
             ));
         }
         if t.outputs.contains(&Output::Height) {
-            let h = synthesis_height(&exemplar_height(&ex), ex.width, &s);
+            let h = synthesis_height(&exemplar_height(&ex), ex.width, s);
+            // One height per synthesised pixel, as above.
             let img = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
                 s.width as u32,
                 s.height as u32,
@@ -171,6 +189,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
         let seed = t.synthesis.as_ref().map_or(0, |p| p.seed);
         let rgba = vessel_tree::tileable_overlay(&photo, ex.width, ex.height, seed);
         let raw = rgba.iter().flatten().copied().collect();
+        // One overlay pixel per exemplar pixel, each side at most 16384.
         let img =
             image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");
         write_png(
@@ -186,6 +205,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
         quality,
         seconds: start.elapsed().as_secs_f64(),
     };
+    // Plain fields with string keys: serialising cannot fail.
     let report = serde_json::to_string_pretty(&built).expect("serialises");
     write_file(&dir.join("report.json"), |w| writeln!(w, "{report}"))?;
     Ok(built)

@@ -15,6 +15,7 @@ use toml::Spanned;
 
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
+use crate::memory::{block_bytes, check, product};
 use crate::synth::block::{MAX_BLOCK, Method};
 use crate::unwrap::seamster::SeamOptions;
 
@@ -28,11 +29,11 @@ struct SceneFile {
     /// The tissue database (default: the one next to the scenes folder).
     database: Option<PathBuf>,
     #[serde(default, rename = "camera")]
-    cameras: Vec<Camera>,
+    cameras: Vec<Spanned<Camera>>,
     #[serde(default, rename = "node")]
     nodes: Vec<Node>,
     #[serde(default)]
-    bake: Option<BakeSettings>,
+    bake: Option<Spanned<BakeSettings>>,
 }
 
 /// A viewpoint: the first is the preview's; all are the endoscope path from
@@ -59,7 +60,7 @@ struct Node {
     #[serde(default, rename = "facet")]
     facets: Vec<FacetEntry>,
     #[serde(default)]
-    interior: Option<Interior>,
+    interior: Option<Spanned<Interior>>,
 }
 
 /// Exactly one of `file` or a generator.
@@ -77,10 +78,10 @@ struct FacetEntry {
     texture: Spanned<String>,
     #[serde(default = "default_tile")]
     tile_size: Spanned<f64>,
-    #[serde(default)]
-    rotation: f64,
-    #[serde(default)]
-    offset: [f64; 2],
+    #[serde(default = "zero")]
+    rotation: Spanned<f64>,
+    #[serde(default = "no_offset")]
+    offset: Spanned<[f64; 2]>,
     #[serde(default = "zero")]
     bump: Spanned<f64>,
     overlay: Option<Spanned<String>>,
@@ -100,6 +101,9 @@ fn default_tile() -> Spanned<f64> {
 }
 fn zero() -> Spanned<f64> {
     Spanned::new(0..0, 0.0)
+}
+fn no_offset() -> Spanned<[f64; 2]> {
+    Spanned::new(0..0, [0.0; 2])
 }
 fn default_opacity() -> Spanned<f64> {
     Spanned::new(0..0, 0.6)
@@ -245,10 +249,15 @@ pub fn default_database() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database")
 }
 
-/// Line of a byte offset.
+/// Line of a byte offset (counted in bytes, so any offset is safe).
 fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].matches('\n').count() + 1
+    let before = &text.as_bytes()[..offset.min(text.len())];
+    before.iter().filter(|&&b| b == b'\n').count() + 1
 }
+
+/// Views of seam visibility a scene may ask for (as `organtex unwrap
+/// --views`): each is a render of the whole mesh.
+const MAX_VIEWS: usize = 1024;
 
 /// Read a scene and everything it includes.
 pub fn load(path: &Path) -> Result<SceneSpec> {
@@ -257,6 +266,30 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
     spec.path = path.to_path_buf();
     if spec.nodes.is_empty() {
         return Err(Error::format(path, "the scene has no [[node]]"));
+    }
+    // Interior blocks are synthesised one after another and all kept until
+    // written: the largest synthesis plus 3 bytes a voxel per block.
+    let interiors: Vec<&Interior> = spec
+        .nodes
+        .iter()
+        .filter_map(|n| n.interior.as_ref())
+        .collect();
+    if let Some(worst) = interiors
+        .iter()
+        .map(|i| block_bytes(spec.bake.interior_voxels, 1, i.method))
+        .max()
+    {
+        let n = spec.bake.interior_voxels;
+        let kept = product(&[n as u64, n as u64, n as u64, 3, interiors.len() as u64]);
+        let blocks = match interiors.len() {
+            1 => "1 interior block".to_string(),
+            k => format!("{k} interior blocks"),
+        };
+        check(
+            &format!("[bake] interior_voxels: synthesising {blocks} of {n}^3 voxels"),
+            worst.saturating_add(kept),
+        )
+        .map_err(|msg| Error::format(path, msg))?;
     }
     Ok(spec)
 }
@@ -277,6 +310,7 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
     let canonical = path.canonicalize().map_err(|e| Error::io(path, e))?;
     stack.push(canonical);
 
+    let bake = file.bake.as_ref();
     let mut spec = SceneSpec {
         path: path.to_path_buf(),
         name: file.name.clone().unwrap_or_else(|| {
@@ -289,27 +323,63 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
             Some(d) => dir.join(d),
             None => default_database(),
         },
-        cameras: file.cameras.clone(),
+        cameras: file.cameras.iter().map(|c| c.get_ref().clone()).collect(),
         nodes: Vec::new(),
-        bake: file.bake.clone().unwrap_or_default(),
+        bake: bake.map(|b| b.get_ref().clone()).unwrap_or_default(),
+    };
+    // The line setting `key` in the [bake] table, else the table's line.
+    let bake_error = |key: &str, msg: String| match bake {
+        Some(b) => {
+            let start = b.span().start;
+            let line = line_of(&text, start);
+            let set = text
+                .get(start..)
+                .unwrap_or("")
+                .lines()
+                .take_while(|l| !l.trim_start().starts_with("[["))
+                .position(|l| {
+                    l.trim_start()
+                        .strip_prefix(key)
+                        .is_some_and(|rest| rest.trim_start().starts_with('='))
+                });
+            Error::at_line(path, line + set.unwrap_or(0), msg)
+        }
+        None => Error::format(path, msg),
     };
     let voxels = spec.bake.interior_voxels;
     if !(16..=MAX_BLOCK).contains(&voxels) || !voxels.is_multiple_of(16) {
-        let msg = format!(
-            "[bake] interior_voxels: {voxels} is not a multiple of 16 from 16 to {MAX_BLOCK}"
-        );
-        return Err(match text.find("interior_voxels") {
-            Some(at) => Error::at_line(path, line_of(&text, at), msg),
-            None => Error::format(path, msg),
-        });
+        return Err(bake_error(
+            "interior_voxels",
+            format!(
+                "[bake] interior_voxels: {voxels} is not a multiple of 16 from 16 to {MAX_BLOCK}"
+            ),
+        ));
     }
-    for c in &spec.cameras {
-        if !(1.0..=170.0).contains(&c.fov) || c.position == c.look_at {
-            return Err(Error::format(
-                path,
+    let views = spec.bake.views;
+    if !(1..=MAX_VIEWS).contains(&views) {
+        return Err(bake_error(
+            "views",
+            format!("[bake] views: must be from 1 to {MAX_VIEWS}, not {views}"),
+        ));
+    }
+    for c in &file.cameras {
+        let cam = c.get_ref();
+        let finite = |p: [f64; 3]| p.iter().all(|x| x.is_finite());
+        if !(finite(cam.position) && finite(cam.look_at)) {
+            return Err(at(
+                c.span(),
+                format!(
+                    "camera: position and look_at must be finite numbers, not {:?} and {:?}",
+                    cam.position, cam.look_at
+                ),
+            ));
+        }
+        if !(1.0..=170.0).contains(&cam.fov) || cam.position == cam.look_at {
+            return Err(at(
+                c.span(),
                 format!(
                     "camera at {:?}: fov must be from 1 to 170 degrees and look_at differ from position",
-                    c.position
+                    cam.position
                 ),
             ));
         }
@@ -319,18 +389,20 @@ fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
         let canonical = target
             .canonicalize()
             .map_err(|e| at(inc.span(), format!("include: {}: {e}", target.display())))?;
-        if stack.contains(&canonical) {
-            let chain: Vec<String> = stack
+        if let Some(first) = stack.iter().position(|p| *p == canonical) {
+            let chain: Vec<String> = stack[first..]
                 .iter()
                 .chain([&canonical])
                 .map(|p| p.display().to_string())
                 .collect();
+            let what = if first + 1 == stack.len() {
+                "the scene includes itself"
+            } else {
+                "the includes form a cycle"
+            };
             return Err(at(
                 inc.span(),
-                format!(
-                    "include: the scene includes itself ({})",
-                    chain.join(" -> ")
-                ),
+                format!("include: {what} ({})", chain.join(" -> ")),
             ));
         }
         let included = load_into(&target, stack)?;
@@ -417,12 +489,26 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
         let tile_size = positive(&f.tile_size, "tile_size")?;
         let max_stretch = positive(&f.max_stretch, "max_stretch")?;
         let max_conformal = checked(&f.max_conformal, "max_conformal", |x| x >= 1.0, "1 or more")?;
+        let rotation = checked(
+            &f.rotation,
+            "rotation",
+            |_| true,
+            "a finite number of degrees",
+        )?;
+        let offset = *f.offset.get_ref();
+        if !offset.iter().all(|x| x.is_finite()) {
+            return Err(at(
+                f.offset.span(),
+                &format!("facet '{name}' offset"),
+                format!("must be two finite numbers, not {offset:?}"),
+            ));
+        }
         facets.push(FacetSettings {
             name: name.clone(),
             texture: f.texture.get_ref().clone(),
             tile_size,
-            rotation: f.rotation,
-            offset: f.offset,
+            rotation,
+            offset,
             bump,
             overlay: f.overlay.as_ref().map(|o| o.get_ref().clone()),
             overlay_opacity: opacity,
@@ -439,11 +525,21 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
             },
         });
     }
+    if let Some(interior) = &node.interior {
+        let size = interior.get_ref().block_size;
+        if !(size.is_finite() && size > 0.0) {
+            return Err(at(
+                interior.span(),
+                "interior block_size",
+                format!("must be a positive number of mesh units, not {size}"),
+            ));
+        }
+    }
     Ok(NodeSpec {
         name: node.name.clone(),
         mesh,
         facets,
-        interior: node.interior.clone(),
+        interior: node.interior.as_ref().map(|i| i.get_ref().clone()),
         origin: Origin {
             file: path.to_path_buf(),
             line: line_of(text, node.mesh.span().start),

@@ -302,6 +302,8 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
         })
         .collect();
     // Smooth each myoma's border, so no face sticks out of it or into it.
+    // The icosphere is built closed and manifold whatever the parameters
+    // (`resolution` is checked to 3..=7), so this cannot fail.
     let sphere_topo = Topology::build(&sphere).expect("an icosphere is manifold");
     for k in 1..=p.myomas.len() as u32 {
         let mut region: Vec<bool> = of_face.iter().map(|&f| f == k).collect();
@@ -449,6 +451,10 @@ fn fmt(x: f64) -> String {
     format!("{}", (x * 1000.0).round() / 1000.0)
 }
 
+/// The largest length a parameter may have: far beyond any organ in any
+/// unit, far below where squared lengths overflow and the geometry breaks.
+const MAX_LENGTH: f64 = 1e6;
+
 fn check(p: &CavityParams) -> Result<(), ParamError> {
     for (key, v) in [
         ("length", p.length),
@@ -458,6 +464,9 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
     ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(bad(key, format!("must be a positive number, not {v}")));
+        }
+        if v > MAX_LENGTH {
+            return Err(bad(key, format!("must be at most {MAX_LENGTH}, not {v}")));
         }
     }
     if p.cervix_radius >= p.width.min(p.depth) / 4.0 {
@@ -499,10 +508,12 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
         Ok(())
     };
     let positive = |key: String, v: f64| -> Result<(), ParamError> {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
+        if !(v.is_finite() && v > 0.0) {
             Err(bad(key, format!("must be a positive number, not {v}")))
+        } else if v > MAX_LENGTH {
+            Err(bad(key, format!("must be at most {MAX_LENGTH}, not {v}")))
+        } else {
+            Ok(())
         }
     };
     for (i, m) in p.myomas.iter().enumerate() {

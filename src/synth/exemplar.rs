@@ -41,8 +41,14 @@ impl Exemplar {
         if width == 0 || height == 0 {
             return Err(Error::invalid("the exemplar has no pixels"));
         }
-        assert_eq!(pixels.len(), width * height);
-        assert_eq!(valid.len(), width * height);
+        if pixels.len() != width * height || valid.len() != width * height {
+            return Err(Error::invalid(format!(
+                "a {width}x{height} exemplar needs {} pixels and validities, not {} and {}",
+                width * height,
+                pixels.len(),
+                valid.len()
+            )));
+        }
         if !valid.iter().any(|&v| v) {
             return Err(Error::invalid("the mask hides every pixel of the exemplar"));
         }
@@ -55,30 +61,34 @@ impl Exemplar {
     }
 
     /// Read an exemplar: the image, its mask (a separate image, else the
-    /// image's alpha channel, else everything usable), cropped.
+    /// image's alpha channel, else everything usable), cropped. Any PNG or
+    /// JPEG the image crate decodes (grey, grey and alpha, RGB, RGBA, 8 or
+    /// 16 bits) is converted to 8-bit RGB; alpha below half masks a pixel.
     pub fn load(path: &Path, mask: Option<&Path>, crop: Option<Crop>) -> Result<Exemplar> {
-        let image = read_image(path)?;
+        // Beyond the decoded image: its RGBA copy (4 bytes a pixel), the
+        // exemplar's colour and validity (4) and the mask's grey copy (1).
+        let image = read_image_holding(path, 9)?;
         let (w, h) = (image.width(), image.height());
         let rgba = image.to_rgba8();
-        let mut valid: Vec<bool> = rgba.pixels().map(|p| p[3] >= 128).collect();
-        if let Some(mask_path) = mask {
-            let m = read_image(mask_path)?;
-            if (m.width(), m.height()) != (w, h) {
-                return Err(Error::format(
-                    mask_path,
-                    format!(
-                        "the mask is {}x{} but the image {} is {w}x{h}",
-                        m.width(),
-                        m.height(),
-                        path.display()
-                    ),
-                ));
+        drop(image);
+        let mask_grey = match mask {
+            Some(mask_path) => {
+                let m = read_image_holding(mask_path, 1)?;
+                if (m.width(), m.height()) != (w, h) {
+                    return Err(Error::format(
+                        mask_path,
+                        format!(
+                            "the mask is {}x{} but the image {} is {w}x{h}",
+                            m.width(),
+                            m.height(),
+                            path.display()
+                        ),
+                    ));
+                }
+                Some(m.to_luma8())
             }
-            for (v, p) in valid.iter_mut().zip(m.to_luma8().pixels()) {
-                *v &= p[0] >= 128;
-            }
-        }
-        let pixels: Vec<[u8; 3]> = rgba.pixels().map(|p| [p[0], p[1], p[2]]).collect();
+            None => None,
+        };
         let c = crop.unwrap_or(Crop {
             x: 0,
             y: 0,
@@ -98,17 +108,38 @@ impl Exemplar {
                 ),
             ));
         }
-        let take = |x: u32, y: u32| ((c.y + y) * w + c.x + x) as usize;
-        let cropped: Vec<usize> = (0..c.height)
-            .flat_map(|y| (0..c.width).map(move |x| take(x, y)))
-            .collect();
-        Exemplar::new(
-            c.width as usize,
-            c.height as usize,
-            cropped.iter().map(|&i| pixels[i]).collect(),
-            cropped.iter().map(|&i| valid[i]).collect(),
-        )
-        .map_err(|e| e.in_file(mask.unwrap_or(path)))
+        let count = c.width as usize * c.height as usize;
+        let mut pixels = Vec::with_capacity(count);
+        let mut valid = Vec::with_capacity(count);
+        // Within the image: the crop was checked against it above.
+        for y in c.y..c.y + c.height {
+            for x in c.x..c.x + c.width {
+                let p = rgba.get_pixel(x, y).0;
+                let masked = mask_grey
+                    .as_ref()
+                    .is_some_and(|m| m.get_pixel(x, y).0[0] < 128);
+                pixels.push([p[0], p[1], p[2]]);
+                valid.push(p[3] >= 128 && !masked);
+            }
+        }
+        Exemplar::new(c.width as usize, c.height as usize, pixels, valid)
+            .map_err(|e| e.in_file(mask.unwrap_or(path)))
+    }
+
+    /// Refuse an exemplar smaller than one `neighbourhood`-wide square:
+    /// synthesis copies whole neighbourhoods, and a smaller exemplar has
+    /// none to copy (a 1 x 1 one would only give its flat colour).
+    pub fn check_neighbourhood(&self, neighbourhood: usize) -> Result<()> {
+        if self.width < neighbourhood || self.height < neighbourhood {
+            return Err(Error::invalid(format!(
+                "the exemplar is {}x{} pixels (after any crop), smaller than one {k}x{k} \
+                 neighbourhood: it needs at least {k}x{k} pixels to copy from",
+                self.width,
+                self.height,
+                k = neighbourhood
+            )));
+        }
+        Ok(())
     }
 
     #[inline]
@@ -172,15 +203,66 @@ impl Exemplar {
     }
 }
 
+/// The largest image side organtex reads (a 16384 x 16384 RGBA image is
+/// already 1 GiB).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// Read a PNG or JPEG. The size in its header is checked before anything
+/// is decoded: at most `MAX_IMAGE_SIDE` a side, and the decoded image and
+/// an 8-bit RGBA copy of it must fit in memory.
 pub fn read_image(path: &Path) -> Result<image::DynamicImage> {
+    read_image_holding(path, 4)
+}
+
+/// `read_image` for a caller that then holds `extra` bytes per pixel.
+fn read_image_holding(path: &Path, extra: u64) -> Result<image::DynamicImage> {
+    use image::ImageDecoder;
+
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not an image"));
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let image = image::load_from_memory(&bytes)
-        .map_err(|e| Error::format(path, format!("cannot read the image: {e}")))?;
-    if image.width() == 0 || image.height() == 0 {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let cannot = |e: image::ImageError| Error::format(path, format!("cannot read the image: {e}"));
+    let mut reader = image::ImageReader::new(std::io::BufReader::new(file))
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
+    if reader.format().is_none() {
+        return Err(Error::format(
+            path,
+            "cannot read the image: it is neither a PNG nor a JPEG file",
+        ));
+    }
+    // The side limit is checked below with a clearer message; this bounds
+    // what the decoder may allocate while reading the header.
+    let mut header_limits = image::Limits::default();
+    header_limits.max_alloc = Some(64 << 20);
+    reader.limits(header_limits);
+    let mut decoder = reader.into_decoder().map_err(cannot)?;
+    let (w, h) = decoder.dimensions();
+    if w == 0 || h == 0 {
         return Err(Error::format(path, "the image has no pixels"));
     }
-    Ok(image)
+    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(Error::format(
+            path,
+            format!(
+                "the image is {w}x{h} pixels; organtex reads images of at most \
+                 {MAX_IMAGE_SIDE} pixels a side"
+            ),
+        ));
+    }
+    let decoded = decoder.total_bytes();
+    let pixels = w as u64 * h as u64;
+    crate::memory::ensure_fits(
+        &format!("decoding this {w}x{h} image"),
+        decoded.saturating_add(pixels * extra),
+    )
+    .map_err(|e| e.in_file(path))?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_IMAGE_SIDE);
+    limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    // The image itself and the decoder's working buffers (a few rows).
+    limits.max_alloc = Some(decoded.saturating_mul(2).max(64 << 20));
+    decoder.set_limits(limits).map_err(cannot)?;
+    image::DynamicImage::from_decoder(decoder).map_err(cannot)
 }

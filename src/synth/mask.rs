@@ -66,3 +66,25 @@ pub fn apply(ex: &mut Exemplar, rules: &[MaskRule]) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every rule on exemplars down to one pixel, one row or one column:
+    /// they only hide pixels, never fail.
+    #[test]
+    fn rules_handle_the_smallest_exemplars() {
+        for (w, h) in [(1, 1), (2, 2), (1, 9), (9, 1), (3, 5)] {
+            let pixels: Vec<[u8; 3]> = (0..w * h)
+                .map(|i| [(i * 37 % 256) as u8, 0, (i * 11 % 256) as u8])
+                .collect();
+            let mut ex = Exemplar::new(w, h, pixels, vec![true; w * h]).unwrap();
+            apply(
+                &mut ex,
+                &[MaskRule::Dark, MaskRule::Bright, MaskRule::Vessels],
+            );
+            assert_eq!(ex.valid.len(), w * h);
+        }
+    }
+}

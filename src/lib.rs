@@ -11,6 +11,8 @@ pub mod bench;
 pub mod blend;
 pub mod db;
 pub mod error;
+#[doc(hidden)]
+pub mod fuzz;
 pub mod linalg;
 pub mod memory;
 pub mod mesh;

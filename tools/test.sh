@@ -53,6 +53,10 @@ grep -q '"preview_renderer": ".*(Gl)"' "$gl_out/out/report.json"
 rm -rf "$gl_out"
 echo "preview.png drawn on GL"
 
+step "tools/fuzz.sh --smoke (every parser's fuzz target, 10,000 inputs each)"
+command -v g++ >/dev/null 2>&1 || need_apt g++
+tools/fuzz.sh --smoke
+
 step "cargo clippy --release --all-targets -- -D warnings"
 cargo clippy --release --all-targets -- -D warnings
 

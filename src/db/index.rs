@@ -182,9 +182,11 @@ impl Database {
 
 /// A TOML error as "file:line: message (key ...)".
 fn toml_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
-    let line = e
-        .span()
-        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    // Counted in bytes: a span need not start on a character boundary.
+    let line = e.span().map(|s| {
+        let before = &text.as_bytes()[..s.start.min(text.len())];
+        before.iter().filter(|&&b| b == b'\n').count() + 1
+    });
     let msg = e.message().to_string();
     match line {
         Some(line) => Error::at_line(path, line, msg),

@@ -295,6 +295,12 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
 }
 
 fn load_into(path: &Path, stack: &mut Vec<PathBuf>) -> Result<SceneSpec> {
+    // A device or pipe (an include of /dev/zero, found by fuzzing) would
+    // be read without end.
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::format(path, "is not a regular file, not a scene"));
+    }
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let file: SceneFile = toml::from_str(&text).map_err(|e| {
         let line = e.span().map(|s| line_of(&text, s.start));

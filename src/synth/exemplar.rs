@@ -215,6 +215,41 @@ pub fn read_image(path: &Path) -> Result<image::DynamicImage> {
 }
 
 /// `read_image` for a caller that then holds `extra` bytes per pixel.
+/// Refuse a PNG whose palette (PLTE chunk) is not whole RGB entries: the
+/// png crate (0.18.1, image-rs/image-png#694) panics on one instead of
+/// returning an error. Found by fuzzing (tests/data/fuzz-regressions/image).
+/// Reads only chunk headers up to the first image data.
+fn check_png_palette(path: &Path) -> Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut header = [0u8; 8];
+    // The signature; a short file is left for the decoder to report.
+    if file.read_exact(&mut header).is_err() {
+        return Ok(());
+    }
+    while file.read_exact(&mut header).is_ok() {
+        let len = u32::from_be_bytes([header[0], header[1], header[2], header[3]]);
+        match &header[4..8] {
+            b"PLTE" if len % 3 != 0 || len > 3 * 256 => {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "cannot read the image: its palette chunk is {len} bytes, \
+                         not whole RGB entries (at most 256 of 3 bytes)"
+                    ),
+                ));
+            }
+            b"IDAT" | b"IEND" => return Ok(()),
+            _ => {}
+        }
+        // The chunk's data and its CRC.
+        if file.seek(SeekFrom::Current(len as i64 + 4)).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
 fn read_image_holding(path: &Path, extra: u64) -> Result<image::DynamicImage> {
     use image::ImageDecoder;
 
@@ -226,11 +261,15 @@ fn read_image_holding(path: &Path, extra: u64) -> Result<image::DynamicImage> {
     let mut reader = image::ImageReader::new(std::io::BufReader::new(file))
         .with_guessed_format()
         .map_err(|e| Error::io(path, e))?;
-    if reader.format().is_none() {
-        return Err(Error::format(
-            path,
-            "cannot read the image: it is neither a PNG nor a JPEG file",
-        ));
+    match reader.format() {
+        None => {
+            return Err(Error::format(
+                path,
+                "cannot read the image: it is neither a PNG nor a JPEG file",
+            ));
+        }
+        Some(image::ImageFormat::Png) => check_png_palette(path)?,
+        Some(_) => {}
     }
     // The side limit is checked below with a clearer message; this bounds
     // what the decoder may allocate while reading the header.

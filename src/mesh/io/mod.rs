@@ -2,9 +2,10 @@
 //! parses, and checks what every stage relies on (see `TriMesh`), so a mesh
 //! that loads is one the rest of organtex can use.
 
-mod obj;
-mod ply;
-mod stl;
+// Visible to the crate for `fuzz`, which fuzzes each parser alone.
+pub(crate) mod obj;
+pub(crate) mod ply;
+pub(crate) mod stl;
 
 use std::path::Path;
 
@@ -45,6 +46,13 @@ pub fn read(path: &Path) -> Result<TriMesh> {
     };
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not a mesh file"));
+    }
+    // A device or a pipe (/dev/zero, a FIFO) would be read without end.
+    if path.exists() && !path.is_file() {
+        return Err(Error::format(
+            path,
+            "is not a regular file (a device or a pipe?), not a mesh file",
+        ));
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if bytes.is_empty() {

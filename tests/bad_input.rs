@@ -170,7 +170,18 @@ fn cases() -> Vec<Case> {
 }
 
 fn check_refused(name: &str, path: &Path, expect: &str, args: &[&str]) {
-    let (ok, stdout, stderr) = organtex(args);
+    assert_refused(name, path, expect, organtex(args));
+}
+
+/// What `check_refused` asserts of a run's outcome (ok, stdout, stderr):
+/// a non-zero exit, no panic, one error line naming the file and saying
+/// `expect`.
+fn assert_refused(
+    name: &str,
+    path: &Path,
+    expect: &str,
+    (ok, stdout, stderr): (bool, String, String),
+) {
     assert!(!ok, "{name}: exit code 0\n{stdout}");
     assert!(!stderr.contains("panicked"), "{name}: panic\n{stderr}");
     let file = path.display().to_string();
@@ -682,23 +693,7 @@ fn check_refused_bounded(
     expect: &str,
     args: &[&str],
 ) {
-    let (ok, stdout, stderr) = organtex_bounded(limit, args);
-    assert!(!ok, "{name}: exit code 0\n{stdout}");
-    assert!(!stderr.contains("panicked"), "{name}: panic\n{stderr}");
-    assert!(
-        stderr.contains(&path.display().to_string()),
-        "{name}: the error does not name {}:\n{stderr}",
-        path.display()
-    );
-    assert!(
-        stderr.contains(expect),
-        "{name}: expected `{expect}` in:\n{stderr}"
-    );
-    assert_eq!(
-        stderr.lines().filter(|l| l.starts_with("error:")).count(),
-        1,
-        "{name}: one error\n{stderr}"
-    );
+    assert_refused(name, path, expect, organtex_bounded(limit, args));
 }
 
 /// An argument refused with a clear message and no panic (clap's own

@@ -208,19 +208,28 @@ fn a_cut_face_shows_the_interior_block() {
     );
 }
 
+/// `organtex bake scenes/bunny.toml -o DIR`, its environment set by `env`.
+fn bake_bunny(
+    dir: &std::path::Path,
+    env: impl FnOnce(&mut std::process::Command) -> &mut std::process::Command,
+) -> std::process::Output {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"));
+    command
+        .args(["bake", repo("scenes/bunny.toml").to_str().unwrap(), "-o"])
+        .arg(dir);
+    env(&mut command).output().unwrap()
+}
+
 #[test]
 fn a_headless_bake_prints_no_error_lines() {
     // Without a desktop session Mesa's device-select Vulkan layer used to
     // print "error: XDG_RUNTIME_DIR is invalid" on every bake that drew a
     // preview, though nothing failed; a bake farm would flag each run.
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
-        .args(["bake", repo("scenes/bunny.toml").to_str().unwrap(), "-o"])
-        .arg(dir.path())
-        .env_remove("XDG_RUNTIME_DIR")
-        .env_remove("NODEVICE_SELECT")
-        .output()
-        .unwrap();
+    let out = bake_bunny(dir.path(), |c| {
+        c.env_remove("XDG_RUNTIME_DIR")
+            .env_remove("NODEVICE_SELECT")
+    });
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(dir.path().join("preview.png").is_file());
@@ -237,12 +246,9 @@ fn a_headless_bake_prints_no_error_lines() {
 #[test]
 fn a_preview_the_gpu_cannot_draw_is_a_warning_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
-        .args(["bake", repo("scenes/bunny.toml").to_str().unwrap(), "-o"])
-        .arg(dir.path())
-        .env(organtex::render::MAX_TEXTURE_ENV, "64")
-        .output()
-        .unwrap();
+    let out = bake_bunny(dir.path(), |c| {
+        c.env(organtex::render::MAX_TEXTURE_ENV, "64")
+    });
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");

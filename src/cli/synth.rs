@@ -64,14 +64,14 @@ fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
     }
 }
 
-/// Pyramid levels, 1 to 16 (each halves the exemplar: 16 would already
-/// need one 7 x 2^15 pixels a side).
+/// Pyramid levels, 1 to `MAX_LEVELS` (the library's own bound).
 pub(super) fn levels_in_range(s: &str) -> std::result::Result<usize, String> {
+    use organtex::synth::block::MAX_LEVELS;
     s.trim()
         .parse::<usize>()
         .ok()
-        .filter(|l| (1..=16).contains(l))
-        .ok_or_else(|| format!("'{s}' is not a number of levels from 1 to 16"))
+        .filter(|l| (1..=MAX_LEVELS).contains(l))
+        .ok_or_else(|| format!("'{s}' is not a number of levels from 1 to {MAX_LEVELS}"))
 }
 
 pub(super) fn parse_crop(s: &str) -> std::result::Result<Crop, String> {

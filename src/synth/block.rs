@@ -128,6 +128,9 @@ pub fn synthesize_block(
 /// The largest block side, in voxels: 256^3 voxels take about 200 MB of
 /// synthesis state (optimize: 0.9 GB).
 pub const MAX_BLOCK: usize = 256;
+/// Most pyramid levels, 2D or 3D: each halves the exemplar, so 16 would
+/// already need one 2^15 pixels a side (and shifts stay far from overflow).
+pub const MAX_LEVELS: usize = 16;
 
 /// Check the options and exemplars; the number of pyramid levels.
 fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
@@ -153,7 +156,11 @@ fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
         )));
     }
     let levels = match opts.levels {
-        Some(0) => return Err(Error::invalid("levels must be at least 1")),
+        Some(l) if !(1..=MAX_LEVELS).contains(&l) => {
+            return Err(Error::invalid(format!(
+                "levels must be from 1 to {MAX_LEVELS}, not {l}"
+            )));
+        }
         Some(l) => l,
         None => {
             let mut l = 1;

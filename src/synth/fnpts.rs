@@ -174,6 +174,12 @@ impl Synthesis {
 fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
     let mut pyramid = vec![ex.clone()];
     match opts.levels {
+        Some(levels) if !(1..=crate::synth::block::MAX_LEVELS).contains(&levels) => {
+            return Err(Error::invalid(format!(
+                "levels must be from 1 to {}, not {levels}",
+                crate::synth::block::MAX_LEVELS
+            )));
+        }
         Some(levels) => {
             while pyramid.len() < levels {
                 let coarser = pyramid

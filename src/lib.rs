@@ -24,6 +24,7 @@ pub mod rng;
 pub mod scene;
 pub mod solid;
 pub mod synth;
+pub mod tetra;
 pub mod unwrap;
 
 pub use error::{Error, Result};

@@ -1,0 +1,453 @@
+//! A bounding volume hierarchy over triangles, shared by the three queries
+//! the tet mesher asks of a surface: the generalized winding number (each
+//! node carries the first-order far-field data of Barill et al. 2018, sec.
+//! 3.2), segment crossings (cut points) and the distance to the closest
+//! triangle (Hausdorff distances).
+//!
+//! Invariants: `tris` holds the triangles in leaf order, each leaf a
+//! contiguous range of at most `LEAF` of them; an internal node's left child
+//! follows it directly, its right child is at `right`. Written here rather
+//! than taken from a crate: the winding number needs its own per-node
+//! moments, which no BVH crate carries.
+
+use glam::{DMat3, DVec3};
+
+/// Triangles per leaf.
+const LEAF: usize = 4;
+
+#[derive(Clone, Debug)]
+pub(crate) struct Node {
+    pub lo: DVec3,
+    pub hi: DVec3,
+    /// Leaf: first triangle; internal: index of the right child.
+    pub index: u32,
+    /// Triangles in a leaf, 0 for an internal node.
+    pub count: u32,
+    /// Sum of the triangles' area vectors (area times unit normal).
+    pub area_normal: DVec3,
+    /// Area-weighted centroid of the triangles.
+    pub center: DVec3,
+    /// Radius of the ball about `center` holding all the triangles.
+    pub radius: f64,
+    /// Total area of the triangles.
+    pub area: f64,
+    /// First moment of the normals about `center`: the sum over triangles
+    /// of area (centroid - center) normal^T (Barill et al. 2018, eq. 11's
+    /// second term).
+    pub moment: DMat3,
+    /// Second moments, one per normal component `i`: the sum over triangles
+    /// of `n_i` times the triangle's `integral (x - center)(x - center)^T dA`
+    /// (with `n` the area normal), for the expansion's third term.
+    pub second: [DMat3; 3],
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct Bvh {
+    pub nodes: Vec<Node>,
+    pub tris: Vec<[DVec3; 3]>,
+}
+
+impl Bvh {
+    /// Build over `tris` (their order is not kept).
+    pub fn new(tris: Vec<[DVec3; 3]>) -> Bvh {
+        let mut bvh = Bvh {
+            nodes: Vec::with_capacity(2 * tris.len() / LEAF + 1),
+            tris,
+        };
+        if !bvh.tris.is_empty() {
+            let n = bvh.tris.len();
+            let mut centroids: Vec<DVec3> = bvh
+                .tris
+                .iter()
+                .map(|t| (t[0] + t[1] + t[2]) / 3.0)
+                .collect();
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            bvh.build(&mut order, &mut centroids, 0);
+            bvh.tris = order.iter().map(|&i| bvh.tris[i as usize]).collect();
+            for i in (0..bvh.nodes.len()).rev() {
+                bvh.fill_moments(i);
+            }
+        }
+        bvh
+    }
+
+    /// Recursive median split on the longest axis of the centroids' box.
+    /// `order[..]` and `centroids[..]` are this node's slice; `first` is its
+    /// offset in the whole array. Returns the node's index.
+    fn build(&mut self, order: &mut [u32], centroids: &mut [DVec3], first: usize) -> usize {
+        let me = self.nodes.len();
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for &t in order.iter() {
+            for p in self.tris[t as usize] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        self.nodes.push(Node {
+            lo,
+            hi,
+            index: first as u32,
+            count: order.len() as u32,
+            area_normal: DVec3::ZERO,
+            center: DVec3::ZERO,
+            radius: 0.0,
+            area: 0.0,
+            moment: DMat3::ZERO,
+            second: [DMat3::ZERO; 3],
+        });
+        if order.len() <= LEAF {
+            return me;
+        }
+        let (mut clo, mut chi) = (centroids[0], centroids[0]);
+        for &c in centroids.iter() {
+            clo = clo.min(c);
+            chi = chi.max(c);
+        }
+        let ext = chi - clo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        // Sort the pairs (centroid, triangle) together by the axis; a plain
+        // sort keeps the build deterministic and simple (n log^2 n overall).
+        let mut pairs: Vec<(DVec3, u32)> = centroids
+            .iter()
+            .copied()
+            .zip(order.iter().copied())
+            .collect();
+        pairs.sort_unstable_by(|a, b| a.0[axis].total_cmp(&b.0[axis]).then(a.1.cmp(&b.1)));
+        for (k, (c, t)) in pairs.into_iter().enumerate() {
+            centroids[k] = c;
+            order[k] = t;
+        }
+        let mid = order.len() / 2;
+        let (lo_o, hi_o) = order.split_at_mut(mid);
+        let (lo_c, hi_c) = centroids.split_at_mut(mid);
+        self.build(lo_o, lo_c, first);
+        let right = self.build(hi_o, hi_c, first + mid);
+        self.nodes[me].index = right as u32;
+        self.nodes[me].count = 0;
+        me
+    }
+
+    /// Area vector, centroid, radius and area of node `i` (called in
+    /// reverse index order: children have larger indices than parents).
+    fn fill_moments(&mut self, i: usize) {
+        let node = &self.nodes[i];
+        let (area_normal, center, radius, area, moment, second) = if node.count > 0 {
+            let tris = &self.tris[node.index as usize..(node.index + node.count) as usize];
+            let mut an = DVec3::ZERO;
+            let mut weighted = DVec3::ZERO;
+            let mut area = 0.0;
+            let mut mean = DVec3::ZERO;
+            for t in tris {
+                let v = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]);
+                let a = v.length();
+                let c = (t[0] + t[1] + t[2]) / 3.0;
+                an += v;
+                weighted += a * c;
+                area += a;
+                mean += c;
+            }
+            let center = if area > 0.0 {
+                weighted / area
+            } else {
+                mean / tris.len() as f64
+            };
+            let radius = tris
+                .iter()
+                .flat_map(|t| t.iter())
+                .map(|&p| p.distance(center))
+                .fold(0.0, f64::max);
+            let mut moment = DMat3::ZERO;
+            let mut second = [DMat3::ZERO; 3];
+            for t in tris {
+                let v = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]);
+                moment += outer((t[0] + t[1] + t[2]) / 3.0 - center, v);
+                // integral over the triangle of d d^T dA = A/12 (sum of
+                // corner outer products + s s^T), s the corners' sum.
+                let a = v.length();
+                let [p, q, r] = t.map(|x| x - center);
+                let s = p + q + r;
+                let s2 = (outer(p, p) + outer(q, q) + outer(r, r) + outer(s, s)) * (a / 12.0);
+                for (i, m) in second.iter_mut().enumerate() {
+                    *m += s2 * (v[i] / a.max(f64::MIN_POSITIVE));
+                }
+            }
+            (an, center, radius, area, moment, second)
+        } else {
+            let (l, r) = (&self.nodes[i + 1], &self.nodes[node.index as usize]);
+            let area = l.area + r.area;
+            let center = if area > 0.0 {
+                (l.area * l.center + r.area * r.center) / area
+            } else {
+                0.5 * (l.center + r.center)
+            };
+            // The children's balls hold their triangles, so this ball holds
+            // the union; it is never much larger than the exact one.
+            let radius =
+                (l.center.distance(center) + l.radius).max(r.center.distance(center) + r.radius);
+            // Moments move to the new centre: d n^T about c' is d n^T
+            // about c plus (c - c') N^T.
+            let moment = l.moment
+                + outer(l.center - center, l.area_normal)
+                + r.moment
+                + outer(r.center - center, r.area_normal);
+            // Second moments about the new centre: with delta = c - c',
+            // S' = S + delta m^T + m delta^T + A delta delta^T per triangle;
+            // weighted by n_i the middle terms use the first moment's column
+            // i and the last the normal sum.
+            let mut second = [DMat3::ZERO; 3];
+            for child in [l, r] {
+                let delta = child.center - center;
+                for (i, m) in second.iter_mut().enumerate() {
+                    let col = child.moment.col(i);
+                    *m += child.second[i]
+                        + outer(delta, col)
+                        + outer(col, delta)
+                        + outer(delta, delta) * child.area_normal[i];
+                }
+            }
+            (
+                l.area_normal + r.area_normal,
+                center,
+                radius,
+                area,
+                moment,
+                second,
+            )
+        };
+        let node = &mut self.nodes[i];
+        node.area_normal = area_normal;
+        node.center = center;
+        node.radius = radius;
+        node.area = area;
+        node.moment = moment;
+        node.second = second;
+    }
+
+    /// Parameters `t` in [0, 1] at which the segment `a + t (b - a)` meets a
+    /// triangle, sorted, with crossings closer than `1e-9` merged (a
+    /// segment through a shared edge meets both triangles).
+    pub fn segment_crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<f64>) {
+        out.clear();
+        if self.nodes.is_empty() {
+            return;
+        }
+        let dir = b - a;
+        let inv = DVec3::ONE / dir;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let i = stack[top];
+            let node = &self.nodes[i as usize];
+            if !segment_hits_box(a, inv, node.lo, node.hi) {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
+                    if let Some(s) = segment_triangle(a, dir, t) {
+                        out.push(s);
+                    }
+                }
+            } else {
+                stack[top] = node.index;
+                stack[top + 1] = i + 1;
+                top += 2;
+            }
+        }
+        out.sort_unstable_by(f64::total_cmp);
+        out.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
+    }
+
+    /// Distance from `q` to the closest triangle (infinite for no triangle).
+    pub fn distance(&self, q: DVec3) -> f64 {
+        self.distance_below(q, f64::INFINITY)
+    }
+
+    /// `min(distance(q), upper)`: an upper bound known beforehand (the
+    /// distance at a nearby point plus the way there) prunes the search.
+    pub fn distance_below(&self, q: DVec3, upper: f64) -> f64 {
+        if self.nodes.is_empty() {
+            return upper;
+        }
+        let mut best2 = upper * upper;
+        let mut stack = [(0u32, 0.0f64); 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (i, d2) = stack[top];
+            if d2 >= best2 {
+                continue;
+            }
+            let node = &self.nodes[i as usize];
+            if node.count > 0 {
+                for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
+                    best2 = best2.min(closest_point(q, t).distance_squared(q));
+                }
+            } else {
+                let l = i + 1;
+                let r = node.index;
+                let dl = box_distance2(q, &self.nodes[l as usize]);
+                let dr = box_distance2(q, &self.nodes[r as usize]);
+                // Push the farther child first so the nearer is searched
+                // first and tightens `best2` sooner.
+                let (near, far) = if dl <= dr {
+                    ((l, dl), (r, dr))
+                } else {
+                    ((r, dr), (l, dl))
+                };
+                if far.1 < best2 {
+                    stack[top] = far;
+                    top += 1;
+                }
+                if near.1 < best2 {
+                    stack[top] = near;
+                    top += 1;
+                }
+            }
+        }
+        best2.sqrt()
+    }
+}
+
+/// The outer product `a b^T`.
+#[inline]
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// Squared distance from `q` to the box of `node` (0 inside).
+#[inline]
+fn box_distance2(q: DVec3, node: &Node) -> f64 {
+    let d = (node.lo - q).max(q - node.hi).max(DVec3::ZERO);
+    d.length_squared()
+}
+
+/// Slab test of the segment `a + t dir`, t in [0, 1], against a box;
+/// `inv` is `1 / dir` (infinite components are handled by IEEE rules).
+#[inline]
+fn segment_hits_box(a: DVec3, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let t0 = (lo - a) * inv;
+    let t1 = (hi - a) * inv;
+    let tmin = t0.min(t1);
+    let tmax = t0.max(t1);
+    // NaN (0 * inf on a slab boundary) compares false and is skipped by
+    // max/min, which treat the segment as inside that slab.
+    let enter = tmin.max_element().max(0.0);
+    let exit = tmax.min_element().min(1.0);
+    enter <= exit + 1e-12
+}
+
+/// Parameter of the segment `a + t dir` (t in [0, 1]) where it meets the
+/// triangle, edges and corners included (Moeller and Trumbore 1997).
+#[inline]
+fn segment_triangle(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<f64> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() <= 1e-300 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = a - t[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = dir.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let tt = e2.dot(q) * inv;
+    (0.0..=1.0).contains(&tt).then_some(tt)
+}
+
+/// Closest point to `p` on the triangle `t`, by the Voronoi region of `p`
+/// among the corners, edges and face (Ericson, Real-Time Collision
+/// Detection, sec. 5.1.5).
+pub(crate) fn closest_point(p: DVec3, t: &[DVec3; 3]) -> DVec3 {
+    let [a, b, c] = *t;
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = va + vb + vc;
+    if denom.abs() <= f64::MIN_POSITIVE {
+        // Degenerate triangle: fall back to its closest corner or edge.
+        return [a, b, c]
+            .into_iter()
+            .min_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)))
+            .unwrap_or(a);
+    }
+    let v = vb / denom;
+    let w = vc / denom;
+    a + ab * v + ac * w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute_distance(tris: &[[DVec3; 3]], q: DVec3) -> f64 {
+        tris.iter()
+            .map(|t| closest_point(q, t).distance(q))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn distance_and_crossings_match_brute_force() {
+        let sphere = crate::mesh::shapes::icosphere(3);
+        let tris: Vec<[DVec3; 3]> = (0..sphere.num_faces()).map(|f| sphere.corners(f)).collect();
+        let bvh = Bvh::new(tris.clone());
+        let mut out = Vec::new();
+        for i in 0..200u64 {
+            let r = |k: u64| (crate::rng::hash(5, &[i, k]) as f64 / u64::MAX as f64) * 3.0 - 1.5;
+            let q = DVec3::new(r(0), r(1), r(2));
+            assert!((bvh.distance(q) - brute_distance(&tris, q)).abs() < 1e-12);
+            let b = DVec3::new(r(3), r(4), r(5));
+            bvh.segment_crossings(q, b, &mut out);
+            let mut brute: Vec<f64> = tris
+                .iter()
+                .filter_map(|t| segment_triangle(q, b - q, t))
+                .collect();
+            brute.sort_unstable_by(f64::total_cmp);
+            brute.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
+            assert_eq!(out.len(), brute.len());
+        }
+    }
+}

@@ -113,6 +113,20 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "tetra bunny",
+            what: "isosurface stuffing at about TetGen's 174,388 tets (target: 1/4 of TetGen's 5.7 s)",
+            prepare: |root| {
+                let mesh = io::read(&bunny(root))?;
+                let opts = crate::tetra::TetOptions {
+                    edge_length: None,
+                    cells: Some(174_388),
+                };
+                Ok(Box::new(move || {
+                    crate::tetra::tetrahedralise(&mesh, &opts, &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "section bunny",
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,

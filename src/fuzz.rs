@@ -288,6 +288,26 @@ pub fn nrrd(bytes: &[u8]) {
     );
 }
 
+/// Tet meshes in legacy VTK (`tetra::io::parse_vtk`). On success: every
+/// position finite, every tet's four corners distinct vertices of the
+/// mesh.
+pub fn vtk(bytes: &[u8]) {
+    let Ok(m) = crate::tetra::io::parse_vtk(Path::new("fuzz.vtk"), bytes) else {
+        return;
+    };
+    assert!(
+        m.positions.iter().all(|p| p.is_finite()),
+        "a non-finite point"
+    );
+    for t in &m.tets {
+        assert!(
+            t.iter().all(|&i| (i as usize) < m.positions.len()),
+            "tet {t:?} beyond {} points",
+            m.positions.len()
+        );
+    }
+}
+
 /// The size an image file's header claims, read independently of
 /// `Exemplar::load`.
 fn claimed_size(bytes: &[u8]) -> Option<(u32, u32)> {

@@ -32,6 +32,7 @@ const TARGETS: &[(&str, Target)] = &[
     ("scene", fuzz::scene),
     ("db_index", fuzz::db_index),
     ("nrrd", fuzz::nrrd),
+    ("vtk", fuzz::vtk),
     ("image", fuzz::image),
     ("mask", fuzz::mask),
 ];

@@ -388,3 +388,81 @@ fn bunny_at_tetgens_tet_count() {
     let ratio = m.num_tets() as f64 / 174_388.0;
     assert!((0.85..1.15).contains(&ratio), "{} tets", m.num_tets());
 }
+
+/// `organtex tetra` through the command line: each format written and the
+/// figures printed as JSON agree with the file; bad arguments and a mesh
+/// with no inside are one clear error each, with nothing written.
+#[test]
+fn the_cli_writes_each_format_and_refuses_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube.obj");
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
+            .arg("tetra")
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    for ext in ["vtk", "msh", "mesh"] {
+        let out = dir.path().join(format!("cube.{ext}"));
+        let (ok, stdout, stderr) = run(&[
+            cube.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--cells",
+            "3000",
+            "--json",
+        ]);
+        assert!(ok, "{stderr}");
+        let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        let tets = figures["tets"].as_u64().unwrap();
+        assert!((2000..=4000).contains(&tets), "{tets} tets for about 3000");
+        assert!(figures["min_dihedral"].as_f64().unwrap() >= MIN_DIHEDRAL);
+        assert!(figures["max_dihedral"].as_f64().unwrap() <= MAX_DIHEDRAL);
+        if ext == "vtk" {
+            let back = tetra::io::read_vtk(&out).unwrap();
+            assert_eq!(back.num_tets() as u64, tets);
+        }
+        assert!(std::fs::metadata(&out).unwrap().len() > 0);
+    }
+    let sheet = dir.path().join("sheet.obj");
+    std::fs::write(
+        &sheet,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let out = dir.path().join("refused.vtk");
+    let o = out.to_str().unwrap();
+    let c = cube.to_str().unwrap();
+    for (args, expect) in [
+        (vec![c, "-o", "x.stl"], "unknown tet mesh format '.stl'"),
+        (
+            vec![c, "-o", o, "--edge-length", "-1"],
+            "'-1' is not a positive length",
+        ),
+        (
+            vec![c, "-o", o, "--edge-length", "nan"],
+            "'nan' is not a positive length",
+        ),
+        (
+            vec![c, "-o", o, "--cells", "0"],
+            "0 is not in 1..=100000000",
+        ),
+        (vec![c, "-o", o, "--edge-length", "1e-7"], "needs about"),
+        (vec![sheet.to_str().unwrap(), "-o", o], "no inside"),
+    ] {
+        let (ok, _, stderr) = run(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains(expect),
+            "{args:?}: expected `{expect}` in {stderr}"
+        );
+    }
+    assert!(!out.exists(), "a refused run wrote its output");
+}

@@ -9,6 +9,7 @@ pub mod progress;
 mod section;
 mod synth;
 mod synth3d;
+mod tetra;
 mod unwrap;
 mod uv_metrics;
 mod view;
@@ -65,6 +66,11 @@ enum Command {
     /// of its triangles. A plane that misses the mesh is an error (exit
     /// status 1) and writes nothing.
     Section(section::Args),
+    /// Fill a closed (or nearly closed) mesh with tetrahedra by isosurface
+    /// stuffing: every dihedral angle in [10.7, 164.8] degrees, inside
+    /// decided by the winding number so self-intersecting or slightly open
+    /// surfaces work; writes .vtk, .msh or .mesh.
+    Tetra(tetra::Args),
     /// The desktop viewer: open a scene or mesh, pick tissues, unwrap,
     /// drag textures into place, cut the organ and see its inside, save
     /// and bake. Needs a display (or Xvfb).
@@ -83,6 +89,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Synth3d(args)) => synth3d::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
+        Some(Command::Tetra(args)) => tetra::run(args),
         Some(Command::View(args)) => view::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {

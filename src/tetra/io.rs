@@ -22,14 +22,20 @@ const VTK_TETRA: u32 = 10;
 /// Write `mesh` in the format its extension names (`.vtk`, `.msh`,
 /// `.mesh`).
 pub fn write(path: &Path, mesh: &TetMesh) -> Result<()> {
+    writer(path)?(path, mesh)
+}
+
+/// The writer for `path`'s extension, or an error naming the formats:
+/// callers check it before long work.
+pub fn writer(path: &Path) -> Result<fn(&Path, &TetMesh) -> Result<()>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
-        "vtk" => write_vtk(path, mesh),
-        "msh" => write_msh(path, mesh),
-        "mesh" => write_medit(path, mesh),
+        "vtk" => Ok(write_vtk),
+        "msh" => Ok(write_msh),
+        "mesh" => Ok(write_medit),
         _ => Err(Error::format(
             path,
             format!(

@@ -348,6 +348,20 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
             block.seam(axis)
         );
     }
+    // And the wall as tetrahedra (tet_mesh = true), within the proven
+    // angles and 1% of the wall's surface.
+    let t = interior
+        .tet_mesh
+        .as_ref()
+        .expect("the scene asks for a tet mesh");
+    assert_eq!(t.file, std::path::Path::new("interior/uterus.vtk"));
+    let tets = organtex::tetra::io::read_vtk(&out.path().join(&t.file)).unwrap();
+    assert_eq!((tets.num_vertices(), tets.num_tets()), (t.vertices, t.tets));
+    let q = tets.quality();
+    assert!(q.min_dihedral >= organtex::tetra::MIN_DIHEDRAL, "{q:?}");
+    assert!(q.max_dihedral <= organtex::tetra::MAX_DIHEDRAL, "{q:?}");
+    assert!(q.min_volume > 0.0);
+    assert!(t.hausdorff_relative.is_some_and(|h| h <= 0.01), "{t:?}");
     let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();
     assert_eq!(
         facets,

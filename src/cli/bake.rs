@@ -140,5 +140,14 @@ fn print(baked: &Baked) {
             i.voxel_size,
             i.texture
         );
+        if let Some(t) = &i.tet_mesh {
+            println!(
+                "      {} ({} tets, dihedral angles {:.1} to {:.1} degrees)",
+                baked.dir.join(&t.file).display(),
+                super::thousands(t.tets),
+                t.min_dihedral,
+                t.max_dihedral
+            );
+        }
     }
 }

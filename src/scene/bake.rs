@@ -60,6 +60,23 @@ pub struct InteriorLine {
     pub file: PathBuf,
     pub voxels: usize,
     pub voxel_size: f64,
+    /// The node's inside as tetrahedra, when `tet_mesh = true`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tet_mesh: Option<TetLine>,
+}
+
+/// A node's tetrahedral mesh (`[node.interior] tet_mesh = true`).
+#[derive(Clone, Debug, Serialize)]
+pub struct TetLine {
+    /// Legacy VTK, relative to the bake's folder.
+    pub file: PathBuf,
+    pub vertices: usize,
+    pub tets: usize,
+    pub min_dihedral: f64,
+    pub max_dihedral: f64,
+    /// Two-sided Hausdorff distance of its boundary to the node's surface,
+    /// over the surface's bounding box diagonal.
+    pub hausdorff_relative: Option<f64>,
 }
 
 /// One facet's line of the report.
@@ -244,7 +261,7 @@ pub fn bake(
         preview_error,
         facets,
         borders,
-        interiors: interiors.iter().map(|(line, _)| line.clone()).collect(),
+        interiors: interiors.iter().map(|i| i.line.clone()).collect(),
         timings: Timings {
             build_s,
             interior_s,
@@ -268,19 +285,22 @@ pub fn bake(
     if let (Some(path), Some(picture)) = (&baked.preview, picture) {
         write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
     }
-    for (line, volume) in &interiors {
-        let path = out.join(&line.file);
+    for interior in &interiors {
+        let path = out.join(&interior.line.file);
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
-        volume.write_nrrd(&path)?;
+        interior.volume.write_nrrd(&path)?;
+        if let (Some(line), Some(tets)) = (&interior.line.tet_mesh, &interior.tets) {
+            crate::tetra::io::write_vtk(&out.join(&line.file), tets)?;
+        }
     }
     Ok(baked)
 }
 
 /// Every node's interior block, synthesised from its tissue's colour
 /// texture (seed 004, 3.3), `[bake] interior_voxels` a side.
-fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<(InteriorLine, Volume)>> {
+fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior>> {
     let n = scene.spec.bake.interior_voxels;
     let mut out = Vec::new();
     for (k, node) in scene.spec.nodes.iter().enumerate() {
@@ -297,25 +317,57 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<(Interio
         volume.spacing = interior.block_size / n as f64;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let mut stem = file_name(&node.name);
-        if out.iter().any(|(l, _): &(InteriorLine, Volume)| {
-            l.file.file_stem() == Some(std::ffi::OsStr::new(&stem))
-        }) {
+        if out
+            .iter()
+            .any(|i: &Interior| i.line.file.file_stem() == Some(std::ffi::OsStr::new(&stem)))
+        {
             stem = format!("{stem}-{k}");
         }
         let file = PathBuf::from("interior").join(format!("{stem}.nrrd"));
-        out.push((
-            InteriorLine {
+        let tets = match interior.tet_mesh {
+            false => None,
+            true => {
+                let mesh = &scene.nodes[k].mesh;
+                let (tets, report) = crate::tetra::tetrahedralise_report(
+                    mesh,
+                    &crate::tetra::TetOptions::default(),
+                    progress,
+                )
+                .map_err(|e| Error::invalid(format!("node '{}': tet mesh: {e}", node.name)))?;
+                let quality = tets.quality();
+                let line = TetLine {
+                    file: file.with_extension("vtk"),
+                    vertices: tets.num_vertices(),
+                    tets: tets.num_tets(),
+                    min_dihedral: quality.min_dihedral,
+                    max_dihedral: quality.max_dihedral,
+                    hausdorff_relative: report.hausdorff.map(|h| h.relative()),
+                };
+                Some((line, tets))
+            }
+        };
+        out.push(Interior {
+            line: InteriorLine {
                 node: node.name.clone(),
                 texture: interior.texture.clone(),
                 method: interior.method,
                 file,
                 voxels: n,
                 voxel_size: volume.spacing,
+                tet_mesh: tets.as_ref().map(|(line, _)| line.clone()),
             },
             volume,
-        ));
+            tets: tets.map(|(_, m)| m),
+        });
     }
     Ok(out)
+}
+
+/// A node's interior as baked: its report line, block and tet mesh.
+struct Interior {
+    line: InteriorLine,
+    volume: Volume,
+    tets: Option<crate::tetra::TetMesh>,
 }
 
 /// A node name as a file name: letters, digits, '-' and '_' kept, the rest

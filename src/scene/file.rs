@@ -129,6 +129,11 @@ pub struct Interior {
     /// across x) or "optimize" (no streaks, softer).
     #[serde(default)]
     pub method: Method,
+    /// Also fill the node's inside with tetrahedra (isosurface stuffing at
+    /// the default resolution), written as interior/NODE.vtk for the
+    /// simulator's physics and for lapped solid textures.
+    #[serde(default)]
+    pub tet_mesh: bool,
 }
 
 fn default_block_size() -> f64 {

@@ -132,7 +132,7 @@ pub struct Interior {
     /// Also fill the node's inside with tetrahedra (isosurface stuffing at
     /// the default resolution), written as interior/NODE.vtk for the
     /// simulator's physics and for lapped solid textures.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub tet_mesh: bool,
 }
 

@@ -69,4 +69,7 @@ python3 tools/compare_uv.py --quick --organtex target/release/organtex
 step "tools/check_bakes.py (every scene baked, Khronos glTF validator, trimesh)"
 python3 tools/check_bakes.py --organtex target/release/organtex
 
+step "tools/compare_tet.py --quick (organtex tetra vs TetGen and fTetWild, files read by meshio)"
+python3 tools/compare_tet.py --quick --organtex target/release/organtex
+
 step "all checks passed"

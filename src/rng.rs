@@ -23,6 +23,12 @@ pub fn hash(seed: u64, key: &[u64]) -> u64 {
     key.iter().fold(mix(seed), |h, &k| mix(h ^ k))
 }
 
+/// A random number in [0, 1] for `key` under `seed`.
+#[inline]
+pub fn unit(seed: u64, key: &[u64]) -> f64 {
+    hash(seed, key) as f64 / u64::MAX as f64
+}
+
 /// A random index in `0..n` for `key` under `seed` (n > 0).
 #[inline]
 pub fn below(seed: u64, key: &[u64], n: usize) -> usize {

@@ -136,7 +136,7 @@ fn every_test_mesh_is_stuffed_within_the_proven_angles() {
 }
 
 fn unit(seed: u64, k: u64) -> f64 {
-    organtex::rng::hash(seed, &[k]) as f64 / u64::MAX as f64
+    organtex::rng::unit(seed, &[k])
 }
 
 /// Cubes, octahedra and icosahedra, randomly turned, stretched and placed

@@ -747,7 +747,7 @@ mod tests {
     use crate::tetra::mesh::dihedral_angles;
 
     fn unit(seed: u64, i: u64, k: u64) -> f64 {
-        crate::rng::hash(seed, &[i, k]) as f64 / u64::MAX as f64
+        crate::rng::unit(seed, &[i, k])
     }
 
     #[test]

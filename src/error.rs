@@ -100,6 +100,25 @@ impl Error {
         }
     }
 
+    /// `path`'s extension is none of `known`: "unknown KIND format '.x'
+    /// (organtex VERB .a, .b)".
+    pub fn unknown_format(path: &Path, kind: &str, verb: &str, known: &[&str]) -> Self {
+        let ext = extension(path);
+        let shown = if ext.is_empty() {
+            "(no extension)".to_string()
+        } else {
+            format!(".{ext}")
+        };
+        let known: Vec<String> = known.iter().map(|e| format!(".{e}")).collect();
+        Error::format(
+            path,
+            format!(
+                "unknown {kind} format '{shown}' (organtex {verb} {})",
+                known.join(", ")
+            ),
+        )
+    }
+
     /// Attach the file the data came from, if the error does not name one yet.
     pub fn in_file(self, file: &Path) -> Self {
         match self {
@@ -119,4 +138,12 @@ impl Error {
             other => other,
         }
     }
+}
+
+/// A file's extension in lower case ("" when it has none): what readers
+/// and writers pick their format by.
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
 }

@@ -135,12 +135,10 @@ impl Gpu {
     /// The first error the device raised outside any scope since the last
     /// call, if any.
     pub fn take_error(&self) -> Result<()> {
-        let first = self
-            .uncaptured
-            .lock()
-            .ok()
-            .and_then(|mut list| (!list.is_empty()).then(|| list.drain(..).next()))
-            .flatten();
+        // A poisoned list still holds the errors (the handler only pushes).
+        let mut list = self.uncaptured.lock().unwrap_or_else(|p| p.into_inner());
+        let first = list.drain(..).next();
+        drop(list);
         match first {
             Some(msg) => Err(Error::invalid(format!(
                 "GPU error on {}: {msg}",

@@ -324,27 +324,10 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
             stem = format!("{stem}-{k}");
         }
         let file = PathBuf::from("interior").join(format!("{stem}.nrrd"));
-        let tets = match interior.tet_mesh {
-            false => None,
-            true => {
-                let mesh = &scene.nodes[k].mesh;
-                let (tets, report) = crate::tetra::tetrahedralise_report(
-                    mesh,
-                    &crate::tetra::TetOptions::default(),
-                    progress,
-                )
-                .map_err(|e| Error::invalid(format!("node '{}': tet mesh: {e}", node.name)))?;
-                let quality = tets.quality();
-                let line = TetLine {
-                    file: file.with_extension("vtk"),
-                    vertices: tets.num_vertices(),
-                    tets: tets.num_tets(),
-                    min_dihedral: quality.min_dihedral,
-                    max_dihedral: quality.max_dihedral,
-                    hausdorff_relative: report.hausdorff.map(|h| h.relative()),
-                };
-                Some((line, tets))
-            }
+        let tets = if interior.tet_mesh {
+            Some(tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)?)
+        } else {
+            None
         };
         out.push(Interior {
             line: InteriorLine {
@@ -361,6 +344,29 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
         });
     }
     Ok(out)
+}
+
+/// The node's inside as tetrahedra at the default resolution, and its
+/// report line (the file beside the block, as .vtk).
+fn tet_mesh(
+    mesh: &crate::mesh::TriMesh,
+    block_file: &Path,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(TetLine, crate::tetra::TetMesh)> {
+    let (tets, report) =
+        crate::tetra::tetrahedralise_report(mesh, &crate::tetra::TetOptions::default(), progress)
+            .map_err(|e| Error::invalid(format!("node '{node}': tet mesh: {e}")))?;
+    let quality = tets.quality();
+    let line = TetLine {
+        file: block_file.with_extension("vtk"),
+        vertices: tets.num_vertices(),
+        tets: tets.num_tets(),
+        min_dihedral: quality.min_dihedral,
+        max_dihedral: quality.max_dihedral,
+        hausdorff_relative: report.hausdorff.map(|h| h.relative()),
+    };
+    Ok((line, tets))
 }
 
 /// A node's interior as baked: its report line, block and tet mesh.

@@ -28,30 +28,11 @@ pub fn write(path: &Path, mesh: &TetMesh) -> Result<()> {
 /// The writer for `path`'s extension, or an error naming the formats:
 /// callers check it before long work.
 pub fn writer(path: &Path) -> Result<fn(&Path, &TetMesh) -> Result<()>> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
+    match crate::error::extension(path).as_str() {
         "vtk" => Ok(write_vtk),
         "msh" => Ok(write_msh),
         "mesh" => Ok(write_medit),
-        _ => Err(Error::format(
-            path,
-            format!(
-                "unknown tet mesh format '{}' (organtex writes {})",
-                if ext.is_empty() {
-                    "(no extension)".to_string()
-                } else {
-                    format!(".{ext}")
-                },
-                WRITABLE
-                    .iter()
-                    .map(|e| format!(".{e}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        )),
+        _ => Err(Error::unknown_format(path, "tet mesh", "writes", WRITABLE)),
     }
 }
 

@@ -17,32 +17,11 @@ pub const READABLE: &[&str] = &["obj", "ply", "stl"];
 
 /// Read a mesh from an OBJ, PLY or STL file.
 pub fn read(path: &Path) -> Result<TriMesh> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let parse = match ext.as_str() {
+    let parse = match crate::error::extension(path).as_str() {
         "obj" => obj::parse,
         "ply" => ply::parse,
         "stl" => stl::parse,
-        _ => {
-            return Err(Error::format(
-                path,
-                format!(
-                    "unknown mesh format '{}' (organtex reads {})",
-                    if ext.is_empty() {
-                        "(no extension)".to_string()
-                    } else {
-                        format!(".{ext}")
-                    },
-                    READABLE
-                        .iter()
-                        .map(|e| format!(".{e}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ));
-        }
+        _ => return Err(Error::unknown_format(path, "mesh", "reads", READABLE)),
     };
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not a mesh file"));

@@ -120,6 +120,7 @@ pub fn workloads() -> Vec<Workload> {
                 let opts = crate::tetra::TetOptions {
                     edge_length: None,
                     cells: Some(174_388),
+                    graded: false,
                 };
                 Ok(Box::new(move || {
                     crate::tetra::tetrahedralise(&mesh, &opts, &Silent).map(drop)

@@ -19,6 +19,7 @@
 //! - `io`: VTK (read and write), gmsh 4.1 and Medit writers.
 
 mod bvh;
+pub mod graded;
 pub mod io;
 pub mod mesh;
 pub mod stuffing;
@@ -40,12 +41,12 @@ pub const DEFAULT_DIVISIONS: f64 = 40.0;
 /// diagonal from the input (two-sided Hausdorff distance).
 pub const DEFAULT_HAUSDORFF: f64 = 0.01;
 /// Finer lattices tried at most to meet `DEFAULT_HAUSDORFF`.
-const MAX_REFINEMENTS: usize = 3;
+const MAX_REFINEMENTS: usize = 4;
 /// The default resolution refines no further than this many tets.
 const MAX_DEFAULT_TETS: f64 = 4e6;
 
-/// How fine a mesh to make. With neither field set the lattice cell is the
-/// bounding box diagonal / 40, made finer (up to three times) while the
+/// How fine a mesh to make. With neither size set the lattice cell is the
+/// bounding box diagonal / 40, made finer (up to four times) while the
 /// boundary is farther than 1% of the diagonal from the input and refining
 /// helps (see `default_resolution`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -56,6 +57,9 @@ pub struct TetOptions {
     /// About this many tets instead (the edge length is chosen from the
     /// enclosed volume, then corrected once from the count obtained).
     pub cells: Option<usize>,
+    /// Grade the interior (`graded`): tets of the edge length along the
+    /// surface, up to 16 times larger deep inside.
+    pub graded: bool,
 }
 
 /// What `tetrahedralise_report` measured besides the mesh.
@@ -68,6 +72,9 @@ pub struct TetReport {
     pub attempts: usize,
     /// The Hausdorff distance, when the default resolution measured it.
     pub hausdorff: Option<Hausdorff>,
+    /// Whether the lattice was graded (asked for, or chosen by the default
+    /// resolution when a uniform one would pass `MAX_DEFAULT_TETS`).
+    pub graded: bool,
 }
 
 /// Fill the inside of `mesh` with tetrahedra. Errors on an empty mesh,
@@ -95,34 +102,51 @@ pub fn tetrahedralise_report(
             "give an edge length or a cell count, not both",
         )),
         (Some(h), None) => {
-            let m = stuffing::stuff(mesh, h, progress)?;
+            let m = nonempty(stuffing::stuff(mesh, h, opts.graded, progress)?, h)?;
             Ok((
                 m,
                 TetReport {
                     edge_length: h,
                     attempts: 1,
                     hausdorff: None,
+                    graded: opts.graded,
                 },
             ))
         }
-        (None, Some(cells)) => by_count(mesh, cells, lo, hi, progress),
-        (None, None) => default_resolution(mesh, diagonal, progress),
+        (None, Some(cells)) => by_count(mesh, cells, opts.graded, lo, hi, progress),
+        (None, None) => default_resolution(mesh, diagonal, opts.graded, progress),
     }
+}
+
+/// A mesh with no tets is an error: every lattice vertex inside was warped
+/// onto the surface, so the inside is thinner than the lattice.
+fn nonempty(m: TetMesh, h: f64) -> Result<TetMesh> {
+    if m.num_tets() == 0 {
+        return Err(Error::invalid(format!(
+            "no tets at edge length {h}: the mesh's inside is thinner than that everywhere \
+             (every lattice vertex inside lies within a quarter edge of the surface); \
+             choose a smaller edge length"
+        )));
+    }
+    Ok(m)
 }
 
 /// The default resolution: diagonal / 40, then finer while the boundary is
 /// farther than 1% of the diagonal from the input, in either direction,
 /// and refining brings that direction down. The distance falls like h^2 on
-/// smooth parts (chords) and like h at sharp features; each step aims for
-/// 0.9% as if it fell like h^2. A direction that does not fall by a fifth
-/// when h does is one no lattice can close (the cap over a hole in an open
-/// surface, or parts of the input inside the solid such as the hidden
-/// halves of interpenetrating shells): it stops the refinement, and when
-/// nothing fell at all the coarser mesh is kept. Never more than
-/// `MAX_DEFAULT_TETS`.
+/// smooth parts (chords) and like h at sharp features and parts thinner
+/// than a cell; each step aims for 0.9% as if it fell like h^2. A
+/// direction that does not fall by a tenth when h falls is one no lattice
+/// can close (the cap over a hole in an open surface, or parts of
+/// the input inside the solid such as the hidden halves of interpenetrating
+/// shells): it stops the refinement, and when nothing fell at all the
+/// coarser mesh is kept. A lattice with no tets (the inside thinner than
+/// the cell everywhere) is refined by half. Never more than
+/// `MAX_DEFAULT_TETS`: a uniform lattice that would pass it goes on graded.
 fn default_resolution(
     mesh: &TriMesh,
     diagonal: f64,
+    mut graded: bool,
     progress: &dyn Progress,
 ) -> Result<(TetMesh, TetReport)> {
     let directions =
@@ -130,19 +154,27 @@ fn default_resolution(
     let mut h = diagonal / DEFAULT_DIVISIONS;
     let mut kept: Option<(TetMesh, TetReport, [f64; 2])> = None;
     for attempts in 1..=1 + MAX_REFINEMENTS {
-        let m = stuffing::stuff(mesh, h, progress)?;
+        let m = stuffing::stuff(mesh, h, graded, progress)?;
+        if m.num_tets() == 0 {
+            if attempts > MAX_REFINEMENTS {
+                return Err(nonempty(m, h).unwrap_err());
+            }
+            h *= 0.5;
+            continue;
+        }
         let d = m.hausdorff(mesh);
         let now = directions(&d);
         let report = TetReport {
             edge_length: h,
             attempts,
             hausdorff: Some(d),
+            graded,
         };
         if now.iter().all(|&x| x <= DEFAULT_HAUSDORFF) {
             return Ok((m, report));
         }
         let before = kept.as_ref().map_or([f64::INFINITY; 2], |k| k.2);
-        let fell = |i: usize| now[i] < 0.8 * before[i];
+        let fell = |i: usize| now[i] < 0.9 * before[i];
         let open: Vec<f64> = (0..2)
             .filter(|&i| now[i] > DEFAULT_HAUSDORFF && fell(i))
             .map(|i| now[i])
@@ -159,7 +191,16 @@ fn default_resolution(
         }
         let worst = open.iter().copied().fold(0.0, f64::max);
         let factor = (0.9 * DEFAULT_HAUSDORFF / worst).sqrt().clamp(0.5, 0.85);
-        if attempts > MAX_REFINEMENTS || m.num_tets() as f64 / factor.powi(3) > MAX_DEFAULT_TETS {
+        if attempts > MAX_REFINEMENTS {
+            return Ok((m, report));
+        }
+        // A graded lattice's count follows the surface (1/h^2), a uniform
+        // one's the volume (1/h^3).
+        let next = |graded: bool| m.num_tets() as f64 / factor.powi(if graded { 2 } else { 3 });
+        if !graded && next(false) > MAX_DEFAULT_TETS {
+            graded = true;
+        }
+        if graded && next(true) > MAX_DEFAULT_TETS {
             return Ok((m, report));
         }
         kept = Some((m, report, now));
@@ -175,6 +216,7 @@ fn default_resolution(
 fn by_count(
     mesh: &TriMesh,
     cells: usize,
+    graded: bool,
     lo: glam::DVec3,
     hi: glam::DVec3,
     progress: &dyn Progress,
@@ -189,27 +231,30 @@ fn by_count(
         volume = 0.5 * ext.x.max(1e-12) * ext.y.max(1e-12) * ext.z.max(1e-12);
     }
     let mut h = (12.0 * volume / cells as f64).cbrt();
-    let first = stuffing::stuff(mesh, h, progress)?;
+    let first = nonempty(stuffing::stuff(mesh, h, graded, progress)?, h)?;
     let ratio = first.num_tets() as f64 / cells as f64;
-    if (ratio - 1.0).abs() <= 0.1 || first.num_tets() == 0 {
+    if (ratio - 1.0).abs() <= 0.1 {
         return Ok((
             first,
             TetReport {
                 edge_length: h,
                 attempts: 1,
                 hausdorff: None,
+                graded,
             },
         ));
     }
-    h *= ratio.cbrt();
+    // Graded counts grow like 1/h^2 where the surface sets them.
+    h *= ratio.powf(if graded { 0.5 } else { 1.0 / 3.0 });
     drop(first);
-    let m = stuffing::stuff(mesh, h, progress)?;
+    let m = nonempty(stuffing::stuff(mesh, h, graded, progress)?, h)?;
     Ok((
         m,
         TetReport {
             edge_length: h,
             attempts: 2,
             hausdorff: None,
+            graded,
         },
     ))
 }

@@ -278,8 +278,8 @@ pub fn estimate_bytes(lattice: &Lattice, fill: f64) -> f64 {
 }
 
 /// Stuff the inside of `mesh` (winding number above 1/2) with tets on the
-/// lattice of cell size `h`.
-pub fn stuff(mesh: &TriMesh, h: f64, progress: &dyn Progress) -> Result<TetMesh> {
+/// lattice of cell size `h`, uniform or graded (`super::graded`).
+pub fn stuff(mesh: &TriMesh, h: f64, graded: bool, progress: &dyn Progress) -> Result<TetMesh> {
     let (lo, hi) = check_input(mesh)?;
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::invalid(format!(
@@ -293,31 +293,124 @@ pub fn stuff(mesh: &TriMesh, h: f64, progress: &dyn Progress) -> Result<TetMesh>
     } else {
         0.1
     };
-    let (vertices, _) = lattice.counts();
-    let bytes = estimate_bytes(&lattice, fill);
+    let (vertices, cubes) = lattice.counts();
+    let bytes = if graded {
+        super::graded::estimate_bytes(cubes, mesh.area(), h)
+    } else {
+        estimate_bytes(&lattice, fill)
+    };
     crate::memory::ensure_fits(
         &format!(
-            "a tet mesh with edge length {h} ({vertices:.3e} lattice vertices, {}x{}x{} cells)",
-            lattice.cubes[0], lattice.cubes[1], lattice.cubes[2]
+            "a {}tet mesh with edge length {h} ({vertices:.3e} lattice vertices, {}x{}x{} cells)",
+            if graded { "graded " } else { "" },
+            lattice.cubes[0],
+            lattice.cubes[1],
+            lattice.cubes[2]
         ),
         bytes.min(u64::MAX as f64) as u64,
     )?;
-    if vertices * 1.5 >= u32::MAX as f64 {
+    let most = if graded {
+        ((1u64 << 20) - 32) as f64
+    } else {
+        u32::MAX as f64 / 1.5
+    };
+    let widest = lattice.cubes.iter().copied().max().unwrap_or(0) as f64;
+    if (!graded && vertices >= most) || (graded && widest >= most) {
         return Err(Error::invalid(format!(
-            "edge length {h} needs {vertices:.3e} lattice vertices, more than 32-bit indices hold; \
-             choose a larger edge length"
+            "edge length {h} needs {vertices:.3e} lattice vertices ({}x{}x{} cells), more than \
+             the mesher's indices hold; choose a larger edge length",
+            lattice.cubes[0], lattice.cubes[1], lattice.cubes[2]
         )));
     }
     let winding = Winding::new(mesh);
-    stuff_lattice(&winding, &lattice, progress)
+    if graded {
+        super::graded::stuff_graded(&winding, &lattice, progress)
+    } else {
+        stuff_lattice(&winding, &lattice, progress)
+    }
 }
 
 /// Steps 2 to 4 on a lattice that fits (checked by `stuff`).
 pub(crate) fn stuff_lattice(
     winding: &Winding,
-    lattice: &Lattice,
+    lattice: &impl Background,
     progress: &dyn Progress,
 ) -> Result<TetMesh> {
+    stuff_background(winding, lattice, progress).map(|(m, _)| m)
+}
+
+/// What the stuffing steps read from a background mesh of tets: the
+/// uniform BCC lattice here, or the graded one (`super::graded`). Its
+/// finest tets must be BCC tets of cell size `h()`, the only ones cut.
+pub(crate) trait Background: Sync {
+    fn num_vertices(&self) -> usize;
+    fn position(&self, v: u32) -> DVec3;
+    /// The finest cell size (long edge length).
+    fn h(&self) -> f64;
+    /// For an edge of a finest tet: both ends cube corners or both centres.
+    fn is_long(&self, u: u32, v: u32) -> bool;
+    /// For a short edge of a finest tet: see `Lattice::is_odd`.
+    fn is_odd(&self, u: u32, v: u32) -> bool;
+    /// The sorted keys of the edges whose ends have strictly opposite signs.
+    fn cut_edges(&self, sign: &[i8]) -> Vec<u64>;
+    /// The tets come in this many chunks, filled in parallel.
+    fn num_chunks(&self) -> usize;
+    /// The tets of chunk `i`, positively oriented, in a fixed order.
+    fn tets_of_chunk(&self, i: usize, emit: &mut dyn FnMut([u32; 4]));
+}
+
+/// The slabs `tets_of_slab` walks, as chunks: every axis, every slab.
+impl Background for Lattice {
+    fn num_vertices(&self) -> usize {
+        Lattice::num_vertices(self)
+    }
+    fn position(&self, v: u32) -> DVec3 {
+        Lattice::position(self, v)
+    }
+    fn h(&self) -> f64 {
+        self.h
+    }
+    fn is_long(&self, u: u32, v: u32) -> bool {
+        Lattice::is_long(self, u, v)
+    }
+    fn is_odd(&self, u: u32, v: u32) -> bool {
+        Lattice::is_odd(self, u, v)
+    }
+    fn cut_edges(&self, sign: &[i8]) -> Vec<u64> {
+        let mut edges: Vec<u64> = (0..Lattice::num_vertices(self) as u32)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                let mut out = Vec::with_capacity(11);
+                self.forward_edges(v, &mut out);
+                let sv = sign[v as usize];
+                out.into_iter()
+                    .filter(move |&u| sv as i32 * sign[u as usize] as i32 == -1)
+                    .map(move |u| key(v, u))
+            })
+            .collect();
+        edges.par_sort_unstable();
+        edges
+    }
+    fn num_chunks(&self) -> usize {
+        self.cubes.iter().sum()
+    }
+    fn tets_of_chunk(&self, i: usize, emit: &mut dyn FnMut([u32; 4])) {
+        let (mut axis, mut slab) = (0, i);
+        while slab >= self.cubes[axis] {
+            slab -= self.cubes[axis];
+            axis += 1;
+        }
+        self.tets_of_slab(axis, slab, emit);
+    }
+}
+
+/// `stuff_lattice`, also giving the final sign of every background vertex
+/// (0 where it was warped to the surface), which the graded lattice checks.
+pub(crate) fn stuff_background(
+    winding: &Winding,
+    lattice: &impl Background,
+    progress: &dyn Progress,
+) -> Result<(TetMesh, Vec<i8>)> {
     let n = lattice.num_vertices();
 
     // 2. f = 1/2 - w at every lattice vertex: its sign is all later steps use.
@@ -347,24 +440,12 @@ pub(crate) fn stuff_lattice(
             "the mesh encloses no lattice vertex at edge length {}: it has no inside (a flat or \
              open sheet, or a mesh whose faces point inwards: winding number below 1/2 everywhere), \
              or the edge length is larger than its thinnest part",
-            lattice.h
+            lattice.h()
         )));
     }
 
     // Cut points on edges with strictly opposite signs, sorted by edge key.
-    let signs = &sign;
-    let mut edges: Vec<u64> = (0..n as u32)
-        .into_par_iter()
-        .flat_map_iter(|v| {
-            let mut out = Vec::with_capacity(11);
-            lattice.forward_edges(v, &mut out);
-            let sv = signs[v as usize];
-            out.into_iter()
-                .filter(move |&u| sv as i32 * signs[u as usize] as i32 == -1)
-                .map(move |u| key(v, u))
-        })
-        .collect();
-    edges.par_sort_unstable();
+    let edges = lattice.cut_edges(&sign);
     progress.stage("cut points", edges.len() as u64);
     let cut_t: Vec<f64> = edges
         .par_iter()
@@ -407,9 +488,9 @@ pub(crate) fn stuff_lattice(
     for (c, (&k, &t)) in edges.iter().zip(&cut_t).enumerate() {
         let (a, b) = unkey(k);
         let (alpha, len) = if lattice.is_long(a, b) {
-            (ALPHA_LONG, lattice.h)
+            (ALPHA_LONG, lattice.h())
         } else {
-            (ALPHA_SHORT, lattice.h * 3f64.sqrt() / 2.0)
+            (ALPHA_SHORT, lattice.h() * 3f64.sqrt() / 2.0)
         };
         if t < alpha {
             candidates.push((a, t * len, c as u32));
@@ -463,18 +544,15 @@ pub(crate) fn stuff_lattice(
             cut_pos[v - n]
         }
     };
-    let slabs: Vec<(usize, usize)> = (0..3)
-        .flat_map(|axis| (0..lattice.cubes[axis]).map(move |s| (axis, s)))
-        .collect();
-    progress.stage("stencils", slabs.len() as u64);
-    let pieces: Vec<Vec<[u32; 4]>> = slabs
-        .par_iter()
-        .map(|&(axis, slab)| {
+    progress.stage("stencils", lattice.num_chunks() as u64);
+    let pieces: Vec<Vec<[u32; 4]>> = (0..lattice.num_chunks())
+        .into_par_iter()
+        .map(|chunk| {
             let mut out = Vec::new();
             if progress.cancelled() {
                 return out;
             }
-            lattice.tets_of_slab(axis, slab, |tet| stencils.fill(tet, &mut out));
+            lattice.tets_of_chunk(chunk, &mut |tet| stencils.fill(tet, &mut out));
             progress.advance(1);
             out
         })
@@ -509,17 +587,17 @@ pub(crate) fn stuff_lattice(
             t.swap(2, 3);
         }
     });
-    Ok(TetMesh { positions, tets })
+    Ok((TetMesh { positions, tets }, sign))
 }
 
 #[inline]
-fn key(a: u32, b: u32) -> u64 {
+pub(crate) fn key(a: u32, b: u32) -> u64 {
     let (a, b) = if a < b { (a, b) } else { (b, a) };
     ((a as u64) << 32) | b as u64
 }
 
 #[inline]
-fn unkey(k: u64) -> (u32, u32) {
+pub(crate) fn unkey(k: u64) -> (u32, u32) {
     ((k >> 32) as u32, k as u32)
 }
 
@@ -563,13 +641,13 @@ fn root(winding: &Winding, inside: DVec3, outside: DVec3, crossings: &mut Vec<f6
 /// vertices) and the sorted keys of the edges carrying cut points. Output
 /// tets use pre-indices: a lattice vertex is itself, the cut point of
 /// `keys[i]` is `num_vertices + i`.
-struct Stencils<'a> {
-    lattice: &'a Lattice,
+struct Stencils<'a, B: Background> {
+    lattice: &'a B,
     sign: &'a [i8],
     keys: &'a [u64],
 }
 
-impl Stencils<'_> {
+impl<B: Background> Stencils<'_, B> {
     /// The cut point on the edge `uv` (both ends unwarped, opposite signs,
     /// so it was computed and kept).
     #[inline]

@@ -18,7 +18,8 @@ pub struct Args {
     /// slightly open surfaces are filled as their inside (winding number).
     mesh: PathBuf,
     /// The tet mesh: legacy VTK (.vtk: SOFA, 3D Slicer, ParaView), gmsh 4.1
-    /// (.msh) or Medit (.mesh).
+    /// (.msh) or Medit (.mesh). Each tet carries its smallest dihedral
+    /// angle (`min_dihedral`, degrees) in .vtk and .msh.
     #[arg(short, long)]
     output: PathBuf,
     /// Lattice cell size in mesh units (the long edges' length). Default:
@@ -79,13 +80,14 @@ pub fn run(args: Args) -> Result<()> {
     };
     let start = Instant::now();
     let bars = Bars::new();
-    let (tets, report) =
+    let (mut tets, report) =
         tetra::tetrahedralise_report(&mesh, &opts, &bars).map_err(|e| e.in_file(&args.mesh))?;
     bars.finish();
     let seconds = start.elapsed().as_secs_f64();
     // The default resolution measured it already; otherwise measure it.
     let hausdorff = report.hausdorff.unwrap_or_else(|| tets.hausdorff(&mesh));
     let quality = tets.quality();
+    tets.set_tet_attribute("min_dihedral", 1, tets.min_dihedrals())?;
     write(&args.output, &tets)?;
     let figures = Figures {
         file: args.mesh.clone(),

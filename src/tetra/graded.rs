@@ -556,6 +556,7 @@ mod tests {
                 .map(|v| graded.position_of(v))
                 .collect(),
             tets: graded.tets.clone(),
+            ..Default::default()
         };
         m.validate().expect("positive tets");
         m.face_adjacency().expect("no face shared by three tets");

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::mesh::TetMesh;
+use super::mesh::{Attribute, TetMesh};
 use crate::atomic::write_file;
 use crate::error::{Error, Result};
 
@@ -55,6 +55,28 @@ pub fn write_vtk(path: &Path, mesh: &TetMesh) -> Result<()> {
         for _ in &mesh.tets {
             writeln!(w, "{VTK_TETRA}")?;
         }
+        for (section, count, attributes) in [
+            ("POINT_DATA", mesh.positions.len(), &mesh.vertex_attributes),
+            ("CELL_DATA", mesh.tets.len(), &mesh.tet_attributes),
+        ] {
+            if attributes.is_empty() {
+                continue;
+            }
+            // FIELD arrays: any number of components, read by VTK, ParaView
+            // and meshio alike.
+            writeln!(
+                w,
+                "{section} {count}\nFIELD attributes {}",
+                attributes.len()
+            )?;
+            for a in attributes {
+                writeln!(w, "{} {} {count} double", a.name, a.components)?;
+                for element in a.values.chunks(a.components) {
+                    let row: Vec<String> = element.iter().map(f64::to_string).collect();
+                    writeln!(w, "{}", row.join(" "))?;
+                }
+            }
+        }
         Ok(())
     })
 }
@@ -88,12 +110,36 @@ pub fn write_msh(path: &Path, mesh: &TetMesh) -> Result<()> {
             writeln!(w, "{} {} {} {} {}", t + 1, a + 1, b + 1, c + 1, d + 1)?;
         }
         writeln!(w, "$EndElements")?;
+        // gmsh views take 1, 3 or 9 components; other attributes are left
+        // out of .msh files (`.vtk` holds any).
+        for (section, attributes) in [
+            ("NodeData", &mesh.vertex_attributes),
+            ("ElementData", &mesh.tet_attributes),
+        ] {
+            for a in attributes
+                .iter()
+                .filter(|a| [1, 3, 9].contains(&a.components))
+            {
+                let count = a.values.len() / a.components;
+                writeln!(
+                    w,
+                    "${section}\n1\n\"{}\"\n1\n0\n3\n0\n{}\n{count}",
+                    a.name, a.components
+                )?;
+                for (i, element) in a.values.chunks(a.components).enumerate() {
+                    let row: Vec<String> = element.iter().map(f64::to_string).collect();
+                    writeln!(w, "{} {}", i + 1, row.join(" "))?;
+                }
+                writeln!(w, "$End{section}")?;
+            }
+        }
         Ok(())
     })
 }
 
 /// Medit (INRIA) `.mesh`, double precision: vertices, the boundary
-/// triangles and the tets, 1-based, every reference 0.
+/// triangles and the tets, 1-based, every reference 0 (the format has no
+/// place for attributes).
 pub fn write_medit(path: &Path, mesh: &TetMesh) -> Result<()> {
     let boundary = mesh.boundary_triangles();
     write_file(path, |w| {
@@ -126,7 +172,8 @@ fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
 
 /// Read a legacy VTK unstructured grid of tetrahedra (ASCII; the classic
 /// CELLS layout and VTK 5's OFFSETS/CONNECTIVITY alike). Point and cell
-/// data are skipped.
+/// data in FIELD, SCALARS and VECTORS arrays become the mesh's attributes;
+/// reading stops at any other kind of data.
 pub fn read_vtk(path: &Path) -> Result<TetMesh> {
     if path.is_dir() {
         return Err(Error::format(path, "is a directory, not a VTK file"));
@@ -208,6 +255,9 @@ pub fn parse_vtk(path: &Path, bytes: &[u8]) -> Result<TetMesh> {
     // Each cell's corners and the line it starts on.
     let mut cells: Option<Vec<(usize, Vec<u64>)>> = None;
     let mut types: Option<(usize, Vec<(usize, u64)>)> = None;
+    // (the section's line and element count, its arrays).
+    type Data = (Option<(usize, usize)>, Vec<Attribute>);
+    let (mut vertex_data, mut tet_data): (Data, Data) = Default::default();
     while let Some((n, word)) = r.next() {
         match word.to_ascii_uppercase().as_str() {
             "POINTS" => {
@@ -305,7 +355,19 @@ pub fn parse_vtk(path: &Path, bytes: &[u8]) -> Result<TetMesh> {
                 }
                 types = Some((n, t));
             }
-            "POINT_DATA" | "CELL_DATA" | "FIELD" | "METADATA" => break,
+            "POINT_DATA" | "CELL_DATA" => {
+                let count: usize = r.number("the data's element count")?;
+                let into = if word.eq_ignore_ascii_case("POINT_DATA") {
+                    &mut vertex_data
+                } else {
+                    &mut tet_data
+                };
+                into.0 = Some((n, count));
+                if !read_arrays(&mut r, count, &mut into.1)? {
+                    break;
+                }
+            }
+            "FIELD" | "METADATA" => break,
             _ => {
                 return Err(Error::at_line(
                     path,
@@ -360,7 +422,94 @@ pub fn parse_vtk(path: &Path, bytes: &[u8]) -> Result<TetMesh> {
         }
         tets.push(tet);
     }
-    Ok(TetMesh { positions, tets })
+    for (section, elements, what) in [
+        (vertex_data.0, positions.len(), "points"),
+        (tet_data.0, tets.len(), "cells"),
+    ] {
+        if let Some((line, count)) = section.filter(|s| s.1 != elements) {
+            return Err(Error::at_line(
+                path,
+                line,
+                format!("data for {count} {what}, the file has {elements}"),
+            ));
+        }
+    }
+    Ok(TetMesh {
+        positions,
+        tets,
+        vertex_attributes: vertex_data.1,
+        tet_attributes: tet_data.1,
+    })
+}
+
+/// Read the arrays of a POINT_DATA or CELL_DATA section of `count`
+/// elements into `out`: FIELD arrays, SCALARS (with their lookup table
+/// line) and VECTORS. Returns false at anything else (the reading stops
+/// there, keeping what was read).
+fn read_arrays(r: &mut Tokens, count: usize, out: &mut Vec<Attribute>) -> Result<bool> {
+    let values = |r: &mut Tokens, name: &str, components: usize| -> Result<Attribute> {
+        let n = components.saturating_mul(count);
+        let mut v = Vec::with_capacity(n.min(1 << 26));
+        for _ in 0..n {
+            v.push(r.number_at::<f64>("an attribute value")?.1);
+        }
+        Ok(Attribute {
+            name: name.into(),
+            components,
+            values: v,
+        })
+    };
+    loop {
+        let Some(word) = r.peek() else {
+            return Ok(true);
+        };
+        match word.to_ascii_uppercase().as_str() {
+            "FIELD" => {
+                r.next();
+                r.token("the field's name")?;
+                let arrays: usize = r.number("the field's array count")?;
+                for _ in 0..arrays {
+                    let name = r.token("an array's name")?.1.to_string();
+                    let components: usize = r.number("an array's component count")?;
+                    let (line, tuples): (usize, usize) = r.number_at("an array's tuple count")?;
+                    if tuples != count {
+                        return Err(Error::at_line(
+                            r.path,
+                            line,
+                            format!("array {name} has {tuples} tuples, the section {count}"),
+                        ));
+                    }
+                    r.token("an array's type")?;
+                    out.push(values(r, &name, components)?);
+                }
+            }
+            "SCALARS" => {
+                r.next();
+                let name = r.token("the scalars' name")?.1.to_string();
+                r.token("the scalars' type")?;
+                let mut components = 1;
+                if let Some(c) = r.peek().and_then(|w| w.parse::<usize>().ok()) {
+                    components = c;
+                    r.next();
+                }
+                if r.peek()
+                    .is_some_and(|w| w.eq_ignore_ascii_case("LOOKUP_TABLE"))
+                {
+                    r.next();
+                    r.token("the lookup table's name")?;
+                }
+                out.push(values(r, &name, components)?);
+            }
+            "VECTORS" => {
+                r.next();
+                let name = r.token("the vectors' name")?.1.to_string();
+                r.token("the vectors' type")?;
+                out.push(values(r, &name, 3)?);
+            }
+            "POINT_DATA" | "CELL_DATA" => return Ok(true),
+            _ => return Ok(false),
+        }
+    }
 }
 
 /// The first 40 characters of a token, for messages.
@@ -459,6 +608,7 @@ mod tests {
                 DVec3::new(1.0, 1.0, 1.0),
             ],
             tets: vec![[0, 1, 2, 3], [1, 4, 2, 3]],
+            ..Default::default()
         }
     }
 
@@ -466,9 +616,50 @@ mod tests {
     fn vtk_round_trips_bit_for_bit() {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("m.vtk");
-        let m = small();
+        let mut m = small();
         write(&path, &m).expect("write");
         assert_eq!(read_vtk(&path).expect("read"), m);
+        // With attributes: a scalar and a vector per vertex, one per tet.
+        m.set_vertex_attribute("depth", 1, vec![0.0, 0.25, 1.0 / 3.0, 1e-300, 1.0])
+            .expect("depth");
+        m.set_vertex_attribute("fibre", 3, (0..15).map(|i| i as f64 / 7.0).collect())
+            .expect("fibre");
+        m.set_tet_attribute("region", 1, vec![1.0, 2.0])
+            .expect("region");
+        write(&path, &m).expect("write");
+        assert_eq!(read_vtk(&path).expect("read"), m);
+    }
+
+    #[test]
+    fn attributes_are_checked_and_scalars_read() {
+        let mut m = small();
+        let e = m
+            .set_vertex_attribute("depth", 1, vec![0.0; 4])
+            .unwrap_err();
+        assert!(e.to_string().contains("4 values, 5 vertices"), "{e}");
+        let e = m
+            .set_tet_attribute("two words", 1, vec![0.0; 2])
+            .unwrap_err();
+        assert!(e.to_string().contains("attribute name"), "{e}");
+        let text = "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n\
+                    POINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\n\
+                    CELL_TYPES 1\n10\nCELL_DATA 1\nSCALARS q float\nLOOKUP_TABLE default\n0.5\n\
+                    POINT_DATA 4\nVECTORS v double\n0 0 1 0 1 0 1 0 0 1 1 1\nNORMALS n double\n";
+        let m = parse_vtk(Path::new("a.vtk"), text.as_bytes()).expect("parse");
+        assert_eq!(
+            m.tet_attribute("q").map(|a| a.values.clone()),
+            Some(vec![0.5])
+        );
+        assert_eq!(
+            m.vertex_attribute("v").map(|a| a.get(3).to_vec()),
+            Some(vec![1.0; 3])
+        );
+        let short = text.replace("POINT_DATA 4", "POINT_DATA 3");
+        let e = parse_vtk(Path::new("a.vtk"), short.as_bytes()).unwrap_err();
+        assert!(
+            e.to_string().contains("data for 3 points, the file has 4"),
+            "{e}"
+        );
     }
 
     #[test]

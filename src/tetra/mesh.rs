@@ -32,6 +32,59 @@ pub struct TetMesh {
     pub positions: Vec<DVec3>,
     /// Positively oriented (see the module's invariants).
     pub tets: Vec<[u32; 4]>,
+    /// Fields over the vertices (a depth, a fibre direction...), written to
+    /// and read from `.vtk` (POINT_DATA) and `.msh` (NodeData).
+    pub vertex_attributes: Vec<Attribute>,
+    /// Fields over the tets (a region, a quality...), as CELL_DATA and
+    /// ElementData.
+    pub tet_attributes: Vec<Attribute>,
+}
+
+/// A named field: `components` numbers per element, element by element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attribute {
+    /// Letters, digits, `_`, `-` and `.` (file formats split names at
+    /// spaces).
+    pub name: String,
+    pub components: usize,
+    pub values: Vec<f64>,
+}
+
+impl Attribute {
+    /// The numbers of element `i`.
+    pub fn get(&self, i: usize) -> &[f64] {
+        &self.values[i * self.components..(i + 1) * self.components]
+    }
+
+    /// Errors unless the name is usable in files and the values fill
+    /// `count` elements; `what` names the elements in the message.
+    fn check(&self, count: usize, what: &str) -> Result<()> {
+        let usable = |c: char| c.is_ascii_alphanumeric() || "_-.".contains(c);
+        if self.name.is_empty() || !self.name.chars().all(usable) {
+            return Err(Error::invalid(format!(
+                "attribute name '{}' must be letters, digits, '_', '-' or '.'",
+                self.name
+            )));
+        }
+        if self.components == 0 || self.values.len() != self.components * count {
+            return Err(Error::invalid(format!(
+                "attribute '{}' has {} values, {count} {what} of {} components need {}",
+                self.name,
+                self.values.len(),
+                self.components,
+                self.components * count
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Replace the attribute of `a`'s name in `list`, or append it.
+fn put(list: &mut Vec<Attribute>, a: Attribute) {
+    match list.iter_mut().find(|b| b.name == a.name) {
+        Some(b) => *b = a,
+        None => list.push(a),
+    }
 }
 
 /// Element quality over a whole mesh. Angles in degrees.
@@ -104,9 +157,72 @@ impl TetMesh {
             .sum()
     }
 
+    /// Add (or replace) the vertex attribute `name`; errors on a bad name or
+    /// a value count that is not `components` per vertex.
+    pub fn set_vertex_attribute(
+        &mut self,
+        name: &str,
+        components: usize,
+        values: Vec<f64>,
+    ) -> Result<()> {
+        let a = Attribute {
+            name: name.into(),
+            components,
+            values,
+        };
+        a.check(self.positions.len(), "vertices")?;
+        put(&mut self.vertex_attributes, a);
+        Ok(())
+    }
+
+    /// Add (or replace) the tet attribute `name`, as `set_vertex_attribute`.
+    pub fn set_tet_attribute(
+        &mut self,
+        name: &str,
+        components: usize,
+        values: Vec<f64>,
+    ) -> Result<()> {
+        let a = Attribute {
+            name: name.into(),
+            components,
+            values,
+        };
+        a.check(self.tets.len(), "tets")?;
+        put(&mut self.tet_attributes, a);
+        Ok(())
+    }
+
+    pub fn vertex_attribute(&self, name: &str) -> Option<&Attribute> {
+        self.vertex_attributes.iter().find(|a| a.name == name)
+    }
+
+    pub fn tet_attribute(&self, name: &str) -> Option<&Attribute> {
+        self.tet_attributes.iter().find(|a| a.name == name)
+    }
+
+    /// Each tet's smallest dihedral angle, in degrees (a tet attribute the
+    /// CLI writes, so a viewer can show where the quality is).
+    pub fn min_dihedrals(&self) -> Vec<f64> {
+        (0..self.num_tets())
+            .into_par_iter()
+            .map(|t| {
+                dihedral_angles(&self.corners(t))
+                    .into_iter()
+                    .fold(f64::INFINITY, f64::min)
+                    .to_degrees()
+            })
+            .collect()
+    }
+
     /// Check the module's invariants; the error names the first offending
     /// element.
     pub fn validate(&self) -> Result<()> {
+        for a in &self.vertex_attributes {
+            a.check(self.positions.len(), "vertices")?;
+        }
+        for a in &self.tet_attributes {
+            a.check(self.tets.len(), "tets")?;
+        }
         if let Some(v) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::invalid(format!(
                 "tet mesh vertex {v} has a non-finite coordinate"
@@ -423,6 +539,7 @@ mod tests {
                 DVec3::new(-1.0, -1.0, 1.0),
             ],
             tets: vec![[0, 1, 2, 3]],
+            ..Default::default()
         }
     }
 
@@ -455,6 +572,7 @@ mod tests {
                 DVec3::new(1.0, 1.0, 1.0),
             ],
             tets: vec![[0, 1, 2, 3], [1, 4, 2, 3]],
+            ..Default::default()
         };
         m.validate().expect("positive");
         let adj = m.face_adjacency().expect("manifold");
@@ -469,6 +587,7 @@ mod tests {
         let m = TetMesh {
             positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
             tets: vec![[0, 1, 2, 3]],
+            ..Default::default()
         };
         let surface = m.boundary_surface();
         let h = m.hausdorff(&surface);

@@ -27,7 +27,7 @@ pub mod winding;
 
 use serde::Serialize;
 
-pub use mesh::{Hausdorff, Quality, TetMesh};
+pub use mesh::{Attribute, Hausdorff, Quality, TetMesh};
 pub use stuffing::{MAX_DIHEDRAL, MIN_DIHEDRAL};
 pub use winding::Winding;
 

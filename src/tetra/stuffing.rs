@@ -587,7 +587,14 @@ pub(crate) fn stuff_background(
             t.swap(2, 3);
         }
     });
-    Ok((TetMesh { positions, tets }, sign))
+    Ok((
+        TetMesh {
+            positions,
+            tets,
+            ..Default::default()
+        },
+        sign,
+    ))
 }
 
 #[inline]

@@ -128,6 +128,37 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "lst fill kiwi",
+            what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
+            prepare: |_| {
+                let a = crate::solid::lst::anchors::kiwi(
+                    crate::solid::lst::TextureType::LayeredTensor,
+                    4126,
+                )?;
+                Ok(Box::new(move || {
+                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
+            name: "lst fill cake",
+            what: "lapped solid texture, type 1-b, layered slab at about 2,734 tets (seed 000: 416 s; target <= 20 s)",
+            prepare: |_| {
+                let a = crate::solid::lst::anchors::cake(
+                    crate::solid::lst::TextureType::Layered,
+                    2734,
+                )?;
+                Ok(Box::new(move || {
+                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
+            name: "lst cut kiwi",
+            what: "plane through the filled kiwi: marching tetrahedra and every vertex's colour (seed 000: 78 ms; target <= 5 ms)",
+            prepare: lst_cut_step,
+        },
+        Workload {
             name: "section bunny",
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,
@@ -242,6 +273,20 @@ fn section_step(root: &Path) -> Result<Step> {
     Ok(Box::new(move || {
         let section = plane_section(&mesh, &topo, plane)?;
         std::hint::black_box(sample_colours(&section, &volume, &placement));
+        Ok(())
+    }))
+}
+
+fn lst_cut_step(_: &Path) -> Result<Step> {
+    use crate::solid::lst;
+    let a = lst::anchors::kiwi(lst::TextureType::LayeredTensor, 4126)?;
+    let model = lst::fill(&a.tets, &a.options, &Silent)?;
+    let exemplar = lst::anchors::layered_exemplar();
+    let normal = glam::DVec3::new(0.3, 0.2, 1.0).normalize();
+    Ok(Box::new(move || {
+        let interior = lst::LstInterior::new(&model, &exemplar)?;
+        let cut = crate::tetra::march::plane_cut(&model.mesh, normal, 0.05);
+        std::hint::black_box(interior.cut_colours(&cut));
         Ok(())
     }))
 }

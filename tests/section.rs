@@ -11,8 +11,8 @@ use glam::DVec3;
 use organtex::mesh::shapes::torus;
 use organtex::mesh::{Topology, TriMesh, io};
 use organtex::solid::{
-    Placement, Plane, SAMPLE_BLOCK_WGSL, Section, plane_section, render_section, sample_colours,
-    section_glb, texture_coordinates, texture_surface,
+    Block, Placement, Plane, SAMPLE_BLOCK_WGSL, Section, plane_section, render_section,
+    sample_colours, section_glb, texture_coordinates, texture_surface,
 };
 use organtex::synth::volume::Volume;
 
@@ -318,7 +318,15 @@ fn the_rendered_section_covers_the_section_in_block_colours() {
     let s = plane_section(&cube, &topo, plane([0.0, 0.0, 1.0], 0.1)).unwrap();
     let volume = block([8, 8, 8]);
     let placement = Placement::of_volume(&volume);
-    let img = render_section(&s, &volume, &placement, 100.0).unwrap();
+    let img = render_section(
+        &s,
+        &Block {
+            volume: &volume,
+            placement,
+        },
+        100.0,
+    )
+    .unwrap();
     assert_eq!(img.image.dimensions(), (100, 100));
     let opaque = img.image.pixels().filter(|p| p[3] == 255).count();
     assert_eq!(opaque, 100 * 100, "the unit square covers every pixel");
@@ -335,7 +343,15 @@ fn the_rendered_section_covers_the_section_in_block_colours() {
     }
     // A diamond covers about half its bounding square.
     let s = plane_section(&cube, &topo, plane([1.0, 1.0, 1.0], 0.5)).unwrap();
-    let img = render_section(&s, &volume, &placement, 200.0).unwrap();
+    let img = render_section(
+        &s,
+        &Block {
+            volume: &volume,
+            placement,
+        },
+        200.0,
+    )
+    .unwrap();
     let opaque = img.image.pixels().filter(|p| p[3] == 255).count() as f64;
     let expect = s.area() * 200.0 * 200.0;
     assert!((opaque / expect - 1.0).abs() < 0.02, "{opaque} vs {expect}");
@@ -347,7 +363,15 @@ fn the_section_glb_is_a_textured_mesh() {
     let s = plane_section(&mesh, &topo, bunny_planes(&mesh)[2]).unwrap();
     let volume = block([8, 8, 8]);
     let placement = Placement::new(DVec3::ZERO, 0.01).unwrap();
-    let img = render_section(&s, &volume, &placement, 2000.0).unwrap();
+    let img = render_section(
+        &s,
+        &Block {
+            volume: &volume,
+            placement,
+        },
+        2000.0,
+    )
+    .unwrap();
     let bytes = section_glb(&s, &img).unwrap();
     assert_eq!(&bytes[0..4], b"glTF");
     let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;

@@ -5,6 +5,7 @@ mod bench;
 mod db;
 mod generate;
 mod info;
+mod lst;
 pub mod progress;
 mod section;
 mod synth;
@@ -71,6 +72,11 @@ enum Command {
     /// decided by the winding number so self-intersecting or slightly open
     /// surfaces work; writes .vtk, .msh or .mesh.
     Tetra(tetra::Args),
+    /// Fill an organ with a lapped solid texture (seed 000): patches of a
+    /// solid exemplar pasted over its tet mesh, oriented by strokes and
+    /// layered by depth between two facets; writes a .lst model that
+    /// `organtex section --lst` cuts.
+    Lst(lst::Args),
     /// The desktop viewer: open a scene or mesh, pick tissues, unwrap,
     /// drag textures into place, cut the organ and see its inside, save
     /// and bake. Needs a display (or Xvfb).
@@ -90,6 +96,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
         Some(Command::Tetra(args)) => tetra::run(args),
+        Some(Command::Lst(args)) => lst::run(args),
         Some(Command::View(args)) => view::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {

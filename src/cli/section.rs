@@ -1,11 +1,14 @@
-//! `organtex section MESH --block B.nrrd --plane NX,NY,NZ,D -o CUT.png|.glb`:
-//! the section of a closed organ by a plane, textured from a solid block.
+//! `organtex section MESH --block B.nrrd [--lst MODEL.lst] --plane
+//! NX,NY,NZ,D -o CUT.png|.glb`: the section of a closed organ by a plane,
+//! textured from a solid block tiled through space, or from a lapped solid
+//! texture whose exemplar the block is.
 
 use std::path::PathBuf;
 
 use glam::DVec3;
 use organtex::mesh::{Topology, io};
-use organtex::solid::{Placement, Plane, plane_section, render_section, section_glb};
+use organtex::solid::lst::{LstInterior, LstModel};
+use organtex::solid::{Block, Placement, Plane, plane_section, render_section, section_glb};
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result, memory};
 
@@ -13,9 +16,13 @@ use organtex::{Error, Result, memory};
 pub struct Args {
     /// Closed mesh to cut (.obj, .ply or .stl).
     mesh: PathBuf,
-    /// The solid texture: an RGB uint8 NRRD volume, tiled through space.
+    /// The solid texture: an RGB uint8 NRRD volume, tiled through space
+    /// (or, with --lst, the model's exemplar).
     #[arg(long, value_name = "NRRD")]
     block: PathBuf,
+    /// Colour the section from a lapped solid texture (`organtex lst`).
+    #[arg(long, value_name = "LST")]
+    lst: Option<PathBuf>,
     /// The cutting plane: the points p with N·p = D. The normal need not be
     /// unit; the section faces along it.
     #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
@@ -116,7 +123,21 @@ pub fn run(args: Args) -> Result<()> {
             memory::product(&[w as u64, h as u64, 13]),
         )?;
     }
-    let image = render_section(&section, &volume, &placement, pixels_per_unit)?;
+    let model = args.lst.as_deref().map(LstModel::read).transpose()?;
+    let image = match &model {
+        Some(model) => {
+            let interior = LstInterior::new(model, &volume).map_err(|e| e.in_file(&args.block))?;
+            render_section(&section, &interior, pixels_per_unit)?
+        }
+        None => render_section(
+            &section,
+            &Block {
+                volume: &volume,
+                placement,
+            },
+            pixels_per_unit,
+        )?,
+    };
     if glb {
         let bytes = section_glb(&section, &image)?;
         organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;

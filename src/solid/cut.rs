@@ -143,12 +143,11 @@ impl SectionImage {
 pub const MAX_SIDE: u32 = 16384;
 
 /// Draw `section` in its plane, `pixels_per_unit` pixels per object unit,
-/// each pixel coloured from the block at its centre's 3D point. Refuses an
+/// each pixel coloured from the interior at its centre's 3D point. Refuses an
 /// empty section and an image over `MAX_SIDE` pixels a side.
 pub fn render_section(
     section: &Section,
-    volume: &Volume,
-    placement: &Placement,
+    interior: &dyn super::Interior,
     pixels_per_unit: f64,
 ) -> Result<SectionImage> {
     let (lo, hi) = section
@@ -187,8 +186,7 @@ pub fn render_section(
         .for_each(|(y, row)| {
             for (x, px) in row.chunks_exact_mut(4).enumerate() {
                 let q = top_left + DVec2::new(x as f64 + 0.5, -(y as f64 + 0.5)) / pixels_per_unit;
-                let p = placement.voxel(section.frame.to_3d(q));
-                let [r, g, b] = to_u8(volume.sample(p.to_array()));
+                let [r, g, b] = interior.colour(section.frame.to_3d(q));
                 let a = if inside[y * w as usize + x] { 255 } else { 0 };
                 px.copy_from_slice(&[r, g, b, a]);
             }

@@ -7,11 +7,12 @@
 
 pub mod cut;
 pub mod interior;
+pub mod lst;
 pub mod section;
 
 pub use cut::{
     Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,
     sample_points, section_glb, texture_coordinates, texture_surface,
 };
-pub use interior::interior_block;
+pub use interior::{Block, Interior, interior_block};
 pub use section::{Frame, Plane, Section, capped, plane_section};

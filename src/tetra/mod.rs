@@ -21,6 +21,7 @@
 mod bvh;
 pub mod graded;
 pub mod io;
+pub mod march;
 pub mod mesh;
 pub mod stuffing;
 pub mod winding;

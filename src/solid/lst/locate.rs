@@ -1,0 +1,166 @@
+//! Which tet holds a point: a uniform grid of cells, each listing the tets
+//! whose bounding boxes meet it. Written here rather than taken from a
+//! crate: the spatial-index crates index points or boxes without the
+//! barycentric test and the nearest-tet fallback a cut needs.
+
+use glam::DVec3;
+
+use crate::tetra::TetMesh;
+
+/// Barycentric coordinates down to this count as inside (points on a face).
+const INSIDE_EPS: f64 = 1e-9;
+
+pub struct Locator<'a> {
+    mesh: &'a TetMesh,
+    lo: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    /// Cell `c`'s tets are `tets[start[c]..start[c + 1]]`.
+    start: Vec<u32>,
+    tets: Vec<u32>,
+}
+
+impl<'a> Locator<'a> {
+    /// About two tets per cell along each axis.
+    pub fn new(mesh: &'a TetMesh) -> Locator<'a> {
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let ext = (hi - lo).max(DVec3::splat(1e-12));
+        let n = mesh.num_tets().max(1) as f64;
+        let cell = (ext.x * ext.y * ext.z / n * 4.0)
+            .cbrt()
+            .max(ext.max_element() / 512.0);
+        let dims = (ext / cell)
+            .to_array()
+            .map(|e| (e.ceil() as usize).clamp(1, 512));
+        let index = |p: DVec3| -> [usize; 3] {
+            let q = (p - lo) / cell;
+            [0, 1, 2].map(|a| (q[a].floor().max(0.0) as usize).min(dims[a] - 1))
+        };
+        let cells = dims[0] * dims[1] * dims[2];
+        let flat = |c: [usize; 3]| c[0] + dims[0] * (c[1] + dims[1] * c[2]);
+        let mut count = vec![0u32; cells + 1];
+        let boxes: Vec<([usize; 3], [usize; 3])> = (0..mesh.num_tets())
+            .map(|t| {
+                let c = mesh.corners(t);
+                let (a, b) = c
+                    .iter()
+                    .fold((c[0], c[0]), |(a, b), &p| (a.min(p), b.max(p)));
+                (index(a), index(b))
+            })
+            .collect();
+        let each = |(a, b): &([usize; 3], [usize; 3]), f: &mut dyn FnMut(usize)| {
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        f(flat([x, y, z]));
+                    }
+                }
+            }
+        };
+        for b in &boxes {
+            each(b, &mut |c| count[c + 1] += 1);
+        }
+        for c in 0..cells {
+            count[c + 1] += count[c];
+        }
+        let mut fill = count.clone();
+        let mut tets = vec![0u32; count[cells] as usize];
+        for (t, b) in boxes.iter().enumerate() {
+            each(b, &mut |c| {
+                tets[fill[c] as usize] = t as u32;
+                fill[c] += 1;
+            });
+        }
+        Locator {
+            mesh,
+            lo,
+            cell,
+            dims,
+            start: count,
+            tets,
+        }
+    }
+
+    fn cell_of(&self, p: DVec3) -> Option<[usize; 3]> {
+        let q = (p - self.lo) / self.cell;
+        let c = [0, 1, 2].map(|a| q[a].floor());
+        (0..3)
+            .all(|a| c[a] >= 0.0 && (c[a] as usize) < self.dims[a])
+            .then(|| c.map(|x| x as usize))
+    }
+
+    fn in_cell(&self, c: [usize; 3]) -> &[u32] {
+        let i = c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2]);
+        &self.tets[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+
+    /// The tet holding `p` and `p`'s barycentric coordinates in it.
+    pub fn locate(&self, p: DVec3) -> Option<(usize, [f64; 4])> {
+        let c = self.cell_of(p)?;
+        self.in_cell(c).iter().find_map(|&t| {
+            let b = barycentric(&self.mesh.corners(t as usize), p);
+            b.iter()
+                .all(|&x| x >= -INSIDE_EPS)
+                .then_some((t as usize, b))
+        })
+    }
+
+    /// `locate`, or for a point outside the mesh the tet with the nearest
+    /// barycentre in the cells around it (barycentric coordinates clamped
+    /// to the tet): section points on the input surface can fall just
+    /// outside the tet boundary, which lies within about a cell of it.
+    pub fn locate_or_nearest(&self, p: DVec3) -> (usize, [f64; 4]) {
+        if let Some(hit) = self.locate(p) {
+            return hit;
+        }
+        let q = (p - self.lo) / self.cell;
+        let centre = [0, 1, 2].map(|a| (q[a].floor().max(0.0) as usize).min(self.dims[a] - 1));
+        let mut best: Option<(f64, usize)> = None;
+        for ring in 0..self.dims.iter().copied().max().unwrap_or(1) {
+            for z in centre[2].saturating_sub(ring)..=(centre[2] + ring).min(self.dims[2] - 1) {
+                for y in centre[1].saturating_sub(ring)..=(centre[1] + ring).min(self.dims[1] - 1) {
+                    for x in
+                        centre[0].saturating_sub(ring)..=(centre[0] + ring).min(self.dims[0] - 1)
+                    {
+                        for &t in self.in_cell([x, y, z]) {
+                            let c = self.mesh.corners(t as usize);
+                            let d = ((c[0] + c[1] + c[2] + c[3]) / 4.0).distance_squared(p);
+                            if best.is_none_or(|(bd, bt)| d < bd || (d == bd && (t as usize) < bt))
+                            {
+                                best = Some((d, t as usize));
+                            }
+                        }
+                    }
+                }
+            }
+            if best.is_some() {
+                break;
+            }
+        }
+        let t = best.map_or(0, |b| b.1);
+        let mut b = barycentric(&self.mesh.corners(t), p).map(|x| x.max(0.0));
+        let sum: f64 = b.iter().sum();
+        if sum > 0.0 {
+            b = b.map(|x| x / sum);
+        } else {
+            b = [0.25; 4];
+        }
+        (t, b)
+    }
+}
+
+/// Barycentric coordinates of `p` in the tet `c`.
+pub fn barycentric(c: &[DVec3; 4], p: DVec3) -> [f64; 4] {
+    let m = glam::DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
+    let det = m.determinant();
+    if det == 0.0 {
+        return [f64::NAN; 4];
+    }
+    let l = m.inverse() * (p - c[0]);
+    [1.0 - l.x - l.y - l.z, l.x, l.y, l.z]
+}

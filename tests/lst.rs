@@ -266,7 +266,7 @@ fn uterus_wall(cells: usize) -> (TetMesh, Vec<DVec3>, Vec<DVec3>) {
 
 #[test]
 fn layered_walls_align_with_their_depth() {
-    let (tets, serosa, cavity) = uterus_wall(8000);
+    let (tets, serosa, cavity) = uterus_wall(30000);
     let c = cake(TextureType::Layered, 2734);
     for (name, mesh, outer, inner, kind) in [
         (

@@ -18,6 +18,8 @@ pub struct Locator<'a> {
     /// Cell `c`'s tets are `tets[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     tets: Vec<u32>,
+    /// The tets across each tet's faces (`TetMesh::face_adjacency`).
+    adjacency: Vec<[u32; 4]>,
 }
 
 impl<'a> Locator<'a> {
@@ -83,6 +85,7 @@ impl<'a> Locator<'a> {
             dims,
             start: count,
             tets,
+            adjacency: mesh.face_adjacency().unwrap_or_default(),
         }
     }
 
@@ -110,48 +113,88 @@ impl<'a> Locator<'a> {
         })
     }
 
-    /// `locate`, or for a point outside the mesh the tet with the nearest
-    /// barycentre in the cells around it (barycentric coordinates clamped
-    /// to the tet): section points on the input surface can fall just
-    /// outside the tet boundary, which lies within about a cell of it.
+    /// `locate`, or for a point outside the mesh the closest point of the
+    /// tets around the one with the nearest barycentre (it and two rings of
+    /// its face neighbours), and its tet: section points on the input
+    /// surface can fall just outside the tet boundary, which lies within
+    /// about a cell of it, and the colour there is then the boundary's,
+    /// continuous along the section's edge.
     pub fn locate_or_nearest(&self, p: DVec3) -> (usize, [f64; 4]) {
         if let Some(hit) = self.locate(p) {
             return hit;
         }
         let q = (p - self.lo) / self.cell;
         let centre = [0, 1, 2].map(|a| (q[a].floor().max(0.0) as usize).min(self.dims[a] - 1));
-        let mut best: Option<(f64, usize)> = None;
+        let mut nearest: Option<(f64, usize)> = None;
         for ring in 0..self.dims.iter().copied().max().unwrap_or(1) {
-            for z in centre[2].saturating_sub(ring)..=(centre[2] + ring).min(self.dims[2] - 1) {
-                for y in centre[1].saturating_sub(ring)..=(centre[1] + ring).min(self.dims[1] - 1) {
-                    for x in
-                        centre[0].saturating_sub(ring)..=(centre[0] + ring).min(self.dims[0] - 1)
-                    {
+            let lo = centre.map(|c| c.saturating_sub(ring));
+            let hi = [0, 1, 2].map(|a| (centre[a] + ring).min(self.dims[a] - 1));
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
                         for &t in self.in_cell([x, y, z]) {
                             let c = self.mesh.corners(t as usize);
                             let d = ((c[0] + c[1] + c[2] + c[3]) / 4.0).distance_squared(p);
-                            if best.is_none_or(|(bd, bt)| d < bd || (d == bd && (t as usize) < bt))
+                            if nearest
+                                .is_none_or(|(bd, bt)| d < bd || (d == bd && (t as usize) < bt))
                             {
-                                best = Some((d, t as usize));
+                                nearest = Some((d, t as usize));
                             }
                         }
                     }
                 }
             }
-            if best.is_some() {
+            if nearest.is_some() {
                 break;
             }
         }
-        let t = best.map_or(0, |b| b.1);
-        let mut b = barycentric(&self.mesh.corners(t), p).map(|x| x.max(0.0));
-        let sum: f64 = b.iter().sum();
-        if sum > 0.0 {
-            b = b.map(|x| x / sum);
-        } else {
-            b = [0.25; 4];
+        let Some((_, first)) = nearest else {
+            return (0, [0.25; 4]);
+        };
+        let mut around = vec![first];
+        for _ in 0..2 {
+            let ring: Vec<usize> = around
+                .iter()
+                .flat_map(|&t| self.adjacency[t])
+                .filter(|&n| n != crate::tetra::mesh::NO_NEIGHBOUR)
+                .map(|n| n as usize)
+                .collect();
+            around.extend(ring);
+            around.sort_unstable();
+            around.dedup();
         }
-        (t, b)
+        let (t, at) = around
+            .iter()
+            .map(|&t| (t, closest_in_tet(&self.mesh.corners(t), p)))
+            .min_by(|a, b| {
+                a.1.distance_squared(p)
+                    .total_cmp(&b.1.distance_squared(p))
+                    .then(a.0.cmp(&b.0))
+            })
+            .expect("one tet at least");
+        let b = barycentric(&self.mesh.corners(t), at).map(|x| x.max(0.0));
+        let sum: f64 = b.iter().sum();
+        (
+            t,
+            if sum > 0.0 {
+                b.map(|x| x / sum)
+            } else {
+                [0.25; 4]
+            },
+        )
     }
+}
+
+/// The point of the tet `c` closest to `p`.
+fn closest_in_tet(c: &[DVec3; 4], p: DVec3) -> DVec3 {
+    if barycentric(c, p).iter().all(|&x| x >= 0.0) {
+        return p;
+    }
+    crate::tetra::mesh::TET_FACES
+        .iter()
+        .map(|f| crate::tetra::closest_point_on_triangle(p, &[c[f[0]], c[f[1]], c[f[2]]]))
+        .min_by(|a, b| a.distance_squared(p).total_cmp(&b.distance_squared(p)))
+        .unwrap_or(p)
 }
 
 /// Barycentric coordinates of `p` in the tet `c`.

@@ -362,6 +362,21 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     assert!(q.max_dihedral <= organtex::tetra::MAX_DIHEDRAL, "{q:?}");
     assert!(q.min_volume > 0.0);
     assert!(t.hausdorff_relative.is_some_and(|h| h <= 0.01), "{t:?}");
+    // And lapped through it, layered from the serosa to the cavity: the
+    // model reads back over the same tets, every tet with a layer, and a
+    // cut through the wall is coloured from it.
+    let l = interior.lst.as_ref().expect("the scene asks for an LST");
+    assert_eq!(
+        (l.file.as_path(), l.kind),
+        (std::path::Path::new("interior/uterus.lst"), "1b")
+    );
+    let model = organtex::solid::lst::LstModel::read(&out.path().join(&l.file)).unwrap();
+    assert_eq!(model.mesh.tets, tets.tets);
+    assert!((0..model.mesh.num_tets()).all(|t| !model.layers_of(t).is_empty()));
+    let lapped = organtex::solid::lst::LstInterior::new(&model, &block).unwrap();
+    let cut = organtex::tetra::march::plane_cut(&model.mesh, glam::DVec3::X, 0.0);
+    assert!(cut.triangles.len() > 1000, "{}", cut.triangles.len());
+    assert_eq!(lapped.cut_colours(&cut).len(), cut.positions.len());
     let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();
     assert_eq!(
         facets,

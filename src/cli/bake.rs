@@ -149,5 +149,16 @@ fn print(baked: &Baked) {
                 t.max_dihedral
             );
         }
+        if let Some(l) = &i.lst {
+            println!(
+                "      {} (lapped solid texture, type {}: {} patches over {} tets, {:.1} MB, {:.1} s)",
+                baked.dir.join(&l.file).display(),
+                l.kind,
+                l.stats.patches,
+                super::thousands(l.tets),
+                l.bytes as f64 / 1e6,
+                l.seconds
+            );
+        }
     }
 }

@@ -63,6 +63,24 @@ pub struct InteriorLine {
     /// The node's inside as tetrahedra, when `tet_mesh = true`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tet_mesh: Option<TetLine>,
+    /// The lapped solid texture, when `[node.interior.lst]` is given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lst: Option<LstLine>,
+}
+
+/// A node's lapped solid texture (`[node.interior.lst]`).
+#[derive(Clone, Debug, Serialize)]
+pub struct LstLine {
+    /// The model (.lst, its tet mesh inside), relative to the bake's
+    /// folder; its exemplar is the node's block.
+    pub file: PathBuf,
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    pub tets: usize,
+    pub bytes: u64,
+    #[serde(flatten)]
+    pub stats: crate::solid::lst::FillStats,
+    pub seconds: f64,
 }
 
 /// A node's tetrahedral mesh (`[node.interior] tet_mesh = true`).
@@ -294,6 +312,9 @@ pub fn bake(
         if let (Some(line), Some(tets)) = (&interior.line.tet_mesh, &interior.tets) {
             crate::tetra::io::write_vtk(&out.join(&line.file), tets)?;
         }
+        if let (Some(line), Some(model)) = (&interior.line.lst, &interior.lst) {
+            model.write(&out.join(&line.file))?;
+        }
     }
     Ok(baked)
 }
@@ -324,10 +345,23 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
             stem = format!("{stem}-{k}");
         }
         let file = PathBuf::from("interior").join(format!("{stem}.nrrd"));
-        let tets = if interior.tet_mesh {
+        let tets = if interior.tet_mesh || interior.lst.is_some() {
             Some(tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)?)
         } else {
             None
+        };
+        let lst = match (&interior.lst, &tets) {
+            (Some(spec), Some((_, tet_mesh))) => Some(lapped(
+                spec,
+                &scene.nodes[k].mesh,
+                tet_mesh,
+                interior.block_size,
+                &file,
+                k as u64,
+                &node.name,
+                progress,
+            )?),
+            _ => None,
         };
         out.push(Interior {
             line: InteriorLine {
@@ -337,10 +371,15 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
                 file,
                 voxels: n,
                 voxel_size: volume.spacing,
-                tet_mesh: tets.as_ref().map(|(line, _)| line.clone()),
+                tet_mesh: tets
+                    .as_ref()
+                    .filter(|_| interior.tet_mesh)
+                    .map(|(line, _)| line.clone()),
+                lst: lst.as_ref().map(|(line, _)| line.clone()),
             },
             volume,
             tets: tets.map(|(_, m)| m),
+            lst: lst.map(|(_, m)| m),
         });
     }
     Ok(out)
@@ -369,11 +408,64 @@ fn tet_mesh(
     Ok((line, tets))
 }
 
-/// A node's interior as baked: its report line, block and tet mesh.
+/// The node's lapped solid texture (`[node.interior.lst]`) and its
+/// report line.
+#[allow(clippy::too_many_arguments)]
+fn lapped(
+    spec: &crate::scene::file::LstSpec,
+    surface: &crate::mesh::TriMesh,
+    tets: &crate::tetra::TetMesh,
+    block_size: f64,
+    block_file: &Path,
+    seed: u64,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(LstLine, crate::solid::lst::LstModel)> {
+    use crate::solid::lst;
+    let err = |e: Error| Error::invalid(format!("node '{node}': [node.interior.lst]: {e}"));
+    let kind = lst::TextureType::parse(&spec.kind).map_err(err)?;
+    let (depth_outer, depth_inner) = match (&spec.depth_outer, &spec.depth_inner) {
+        (Some(o), Some(i)) => lst::facet_depth_points(surface, o, i).map_err(err)?,
+        (None, None) if !kind.needs_depth() => (Vec::new(), Vec::new()),
+        _ => {
+            return Err(err(Error::invalid(format!(
+                "type {} needs depth_outer and depth_inner (two facets)",
+                kind.name()
+            ))));
+        }
+    };
+    let opts = lst::LstOptions {
+        kind,
+        scale: spec.scale.unwrap_or(block_size),
+        strokes: spec
+            .strokes
+            .iter()
+            .map(|s| s.iter().map(|&p| glam::DVec3::from_array(p)).collect())
+            .collect(),
+        depth_outer,
+        depth_inner,
+        seed,
+    };
+    let start = std::time::Instant::now();
+    let (model, stats) = lst::fill_stats(tets, &opts, progress).map_err(err)?;
+    let line = LstLine {
+        file: block_file.with_extension("lst"),
+        kind: kind.name(),
+        tets: tets.num_tets(),
+        bytes: model.file_size(),
+        stats,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok((line, model))
+}
+
+/// A node's interior as baked: its report line, block, tet mesh and
+/// lapped solid texture.
 struct Interior {
     line: InteriorLine,
     volume: Volume,
     tets: Option<crate::tetra::TetMesh>,
+    lst: Option<crate::solid::lst::LstModel>,
 }
 
 /// A node name as a file name: letters, digits, '-' and '_' kept, the rest

@@ -134,6 +134,34 @@ pub struct Interior {
     /// simulator's physics and for lapped solid textures.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub tet_mesh: bool,
+    /// Fill the inside with a lapped solid texture of the block (seed
+    /// 000), written as interior/NODE.lst: patches oriented by strokes and
+    /// layered by depth between two facets.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lst: Option<LstSpec>,
+}
+
+/// `[node.interior.lst]`: how to lap the node's block through it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LstSpec {
+    /// Seed 000's texture type: "0", "1a", "1b", "2a" or "2b".
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// The facet at depth 0 (types 1b, 2a, 2b), e.g. "serosa".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_outer: Option<String>,
+    /// The facet at depth 1, e.g. "wall".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_inner: Option<String>,
+    /// Polylines inside the node along which the texture's first axis runs
+    /// (types 1a, 2a, 2b).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strokes: Vec<Vec<[f64; 3]>>,
+    /// Mesh units one patch spans (types 0, 1a, 2a; default: the block
+    /// size).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
 }
 
 fn default_block_size() -> f64 {
@@ -544,6 +572,43 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                 "interior block_size",
                 format!("must be a positive number of mesh units, not {size}"),
             ));
+        }
+        if let Some(lst) = &interior.get_ref().lst {
+            let bad = |msg: String| at(interior.span(), "interior lst", msg);
+            let kind =
+                crate::solid::lst::TextureType::parse(&lst.kind).map_err(|e| bad(e.to_string()))?;
+            if let Some(scale) = lst.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
+                return Err(bad(format!(
+                    "scale must be a positive number of mesh units, not {scale}"
+                )));
+            }
+            if kind.needs_depth() != (lst.depth_outer.is_some() && lst.depth_inner.is_some()) {
+                return Err(bad(format!(
+                    "type {} {} depth_outer and depth_inner",
+                    kind.name(),
+                    if kind.needs_depth() {
+                        "needs"
+                    } else {
+                        "takes no"
+                    }
+                )));
+            }
+            if kind.needs_strokes() && lst.strokes.is_empty() {
+                return Err(bad(format!(
+                    "type {} follows strokes: give at least one",
+                    kind.name()
+                )));
+            }
+            let known: Vec<&str> = facets.iter().map(|f| f.name.as_str()).collect();
+            for f in [&lst.depth_outer, &lst.depth_inner].into_iter().flatten() {
+                // With a "*" facet the mesh's own names decide (at the bake).
+                if !known.contains(&f.as_str()) && !known.contains(&"*") {
+                    return Err(bad(format!(
+                        "no facet '{f}' in this node (it has: {})",
+                        known.join(", ")
+                    )));
+                }
+            }
         }
     }
     Ok(NodeSpec {

@@ -308,6 +308,33 @@ pub fn vtk(bytes: &[u8]) {
     }
 }
 
+/// Lapped solid texture models (`solid::lst::LstModel::parse`). On
+/// success: a valid tet mesh, layer offsets that rise to the layer count,
+/// depths exactly for layered types, and writing it gives the same bytes'
+/// model back.
+pub fn lst(bytes: &[u8]) {
+    use crate::solid::lst::LstModel;
+    let Ok(m) = LstModel::parse(bytes) else {
+        return;
+    };
+    m.mesh
+        .validate()
+        .expect("a parsed model's tet mesh is valid");
+    assert_eq!(m.start.len(), m.mesh.num_tets() + 1);
+    assert!(m.start.windows(2).all(|w| w[0] <= w[1]));
+    assert_eq!(*m.start.last().unwrap_or(&0) as usize, m.layers.len());
+    assert_eq!(m.depth.is_some(), m.kind.layered());
+    with_file("fuzz.lst", &[], |dir| {
+        let path = dir.join("back.lst");
+        m.write(&path).expect("a parsed model writes");
+        assert!(
+            LstModel::read(&path).expect("and reads back") == m,
+            "round trip"
+        );
+        let _ = std::fs::remove_file(&path);
+    });
+}
+
 /// The size an image file's header claims, read independently of
 /// `Exemplar::load`.
 fn claimed_size(bytes: &[u8]) -> Option<(u32, u32)> {

@@ -213,6 +213,11 @@ impl LstModel {
                     ));
                 }
             }
+            // Patches are numbered from 0, one per paste: no file holds
+            // u32::MAX of them.
+            if patch == u32::MAX {
+                return Err(format!("layer {i} has patch number {patch}"));
+            }
             patches = patches.max(patch + 1);
             layers.push(Layer {
                 patch,

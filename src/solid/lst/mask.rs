@@ -105,18 +105,28 @@ impl Splotch {
     /// The mask's alpha at texture coordinates `w` (r, s, t).
     pub fn alpha(&self, kind: MaskKind, w: [f64; 3]) -> f64 {
         let c = [w[0] - 0.5, w[1] - 0.5, w[2] - 0.5];
+        // The radius stays within RADIUS (1 +- WANDER) (the waves' amplitudes
+        // add up to 1): inside its least, less the fall-off, alpha is 1;
+        // past its most, 0, without evaluating the waves.
+        let (least, most) = (RADIUS * (1.0 - WANDER) - FALLOFF, RADIUS * (1.0 + WANDER));
         match kind {
             MaskKind::Splotch => {
                 let r = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-                if r < 1e-12 {
+                if r <= least {
                     return 1.0;
+                }
+                if r >= most {
+                    return 0.0;
                 }
                 let edge = self.radius([c[0] / r, c[1] / r, c[2] / r]);
                 fall((r - (edge - FALLOFF)) / FALLOFF)
             }
             band => {
                 let r = (c[0] * c[0] + c[2] * c[2]).sqrt();
-                let lateral = if r < 1e-12 {
+                if r >= most {
+                    return 0.0;
+                }
+                let lateral = if r <= least {
                     1.0
                 } else {
                     let edge = self.radius([c[0] / r, 0.0, c[2] / r]);

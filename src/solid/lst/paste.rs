@@ -27,6 +27,7 @@
 //! under a translation).
 
 use glam::{DMat3, DVec3};
+use rayon::prelude::*;
 
 use super::mask::{MaskKind, Splotch};
 use super::model::Layer;
@@ -258,14 +259,30 @@ pub fn paste(
                     coords: w.map(|c| c.as_vec3().to_array()),
                 },
             ));
+        }
+        // The masks' alpha at every sample of every clump tet, in parallel
+        // (the tets are independent); the uncovered list is updated after,
+        // in clump order, so the result does not depend on threads.
+        let alphas: Vec<Vec<u8>> = clump
+            .par_iter()
+            .map(|&t| {
+                let w = mesh.tets[t].map(|v| coords[local[v as usize] as usize]);
+                samples
+                    .iter()
+                    .map(|b| {
+                        let p = w[0] * b[0] as f64
+                            + w[1] * b[1] as f64
+                            + w[2] * b[2] as f64
+                            + w[3] * b[3] as f64;
+                        (splotch.alpha(kind, p.to_array()) * 255.0).round() as u8
+                    })
+                    .collect()
+            })
+            .collect();
+        for (&t, alpha) in clump.iter().zip(alphas) {
             let cov = &mut coverage[t * ns..(t + 1) * ns];
             let was_covered = cov.iter().all(|&c| c == 255);
-            for (c, b) in cov.iter_mut().zip(&samples) {
-                let p = w[0] * b[0] as f64
-                    + w[1] * b[1] as f64
-                    + w[2] * b[2] as f64
-                    + w[3] * b[3] as f64;
-                let a = (splotch.alpha(kind, p.to_array()) * 255.0).round() as u8;
+            for (c, a) in cov.iter_mut().zip(alpha) {
                 *c = c.saturating_add(a);
             }
             if !was_covered && cov.iter().all(|&c| c == 255) {

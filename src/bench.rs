@@ -159,6 +159,11 @@ pub fn workloads() -> Vec<Workload> {
             prepare: lst_cut_step,
         },
         Workload {
+            name: "lst cut uterus",
+            what: "plane through the bundled scene's lapped uterine wall (1-b, default resolution): marching tetrahedra and every vertex's colour",
+            prepare: lst_cut_uterus,
+        },
+        Workload {
             name: "section bunny",
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,
@@ -286,6 +291,38 @@ fn lst_cut_step(_: &Path) -> Result<Step> {
     Ok(Box::new(move || {
         let interior = lst::LstInterior::new(&model, &exemplar)?;
         let cut = crate::tetra::march::plane_cut(&model.mesh, normal, 0.05);
+        std::hint::black_box(interior.cut_colours(&cut));
+        Ok(())
+    }))
+}
+
+/// The bundled scene's uterine wall, tetrahedralised and lapped (1-b,
+/// serosa to cavity) as its bake does (untimed), cut across its width.
+fn lst_cut_uterus(root: &Path) -> Result<Step> {
+    use crate::solid::lst;
+    let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
+    let crate::scene::file::MeshSpec::UterineCavity(params) = &spec.nodes[0].mesh else {
+        return Err(crate::Error::invalid(
+            "the bundled scene's uterus is no longer generated",
+        ));
+    };
+    let surface = crate::scene::uterus::generate(params)
+        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))?;
+    let tets = crate::tetra::tetrahedralise(&surface, &Default::default(), &Silent)?;
+    let (outer, inner) = lst::facet_depth_points(&surface, "serosa", "wall")?;
+    let opts = lst::LstOptions {
+        kind: lst::TextureType::Layered,
+        scale: 10.0,
+        strokes: Vec::new(),
+        depth_outer: outer,
+        depth_inner: inner,
+        seed: 0,
+    };
+    let model = lst::fill(&tets, &opts, &Silent)?;
+    let exemplar = lst::anchors::layered_exemplar();
+    Ok(Box::new(move || {
+        let interior = lst::LstInterior::new(&model, &exemplar)?;
+        let cut = crate::tetra::march::plane_cut(&model.mesh, glam::DVec3::X, 0.0);
         std::hint::black_box(interior.cut_colours(&cut));
         Ok(())
     }))

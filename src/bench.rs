@@ -306,19 +306,8 @@ fn lst_cut_uterus(root: &Path) -> Result<Step> {
             "the bundled scene's uterus is no longer generated",
         ));
     };
-    let surface = crate::scene::uterus::generate(params)
-        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))?;
-    let tets = crate::tetra::tetrahedralise(&surface, &Default::default(), &Silent)?;
-    let (outer, inner) = lst::facet_depth_points(&surface, "serosa", "wall")?;
-    let opts = lst::LstOptions {
-        kind: lst::TextureType::Layered,
-        scale: 10.0,
-        strokes: Vec::new(),
-        depth_outer: outer,
-        depth_inner: inner,
-        seed: 0,
-    };
-    let model = lst::fill(&tets, &opts, &Silent)?;
+    let a = lst::anchors::uterus_wall(params, &Default::default(), lst::TextureType::Layered)?;
+    let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
     Ok(Box::new(move || {
         let interior = lst::LstInterior::new(&model, &exemplar)?;

@@ -13,7 +13,7 @@ use organtex::solid::lst::{
     paste::sample_points,
 };
 use organtex::synth::volume::Volume;
-use organtex::tetra::{self, TetMesh, TetOptions};
+use organtex::tetra::TetOptions;
 
 fn kiwi(kind: TextureType, cells: usize) -> Anchor {
     anchors::kiwi(kind, cells).expect("kiwi")
@@ -248,25 +248,17 @@ fn bad_input_gives_clear_errors() {
     assert_eq!(MaskKind::from_u8(9), None);
 }
 
-/// The bundled scene's uterine wall (10 mm thick, no myomas), about `cells`
-/// tets, and its serosa and cavity vertices: depth 0 outside, 1 at the
-/// cavity.
-fn uterus_wall(cells: usize) -> (TetMesh, Vec<DVec3>, Vec<DVec3>) {
-    let params: organtex::scene::uterus::CavityParams =
-        toml::from_str("seed = 7\nresolution = 4\nwall_thickness = 10.0").expect("params");
-    let m = organtex::scene::uterus::generate(&params).expect("wall");
-    let (serosa, cavity) = lst::facet_depth_points(&m, "serosa", "wall").expect("facets");
-    let opts = TetOptions {
-        cells: Some(cells),
-        ..Default::default()
-    };
-    let t = tetra::tetrahedralise(&m, &opts, &Silent).expect("wall tets");
-    (t, serosa, cavity)
-}
-
 #[test]
 fn layered_walls_align_with_their_depth() {
-    let (tets, serosa, cavity) = uterus_wall(30000);
+    // The bundled scene's uterine wall (10 mm thick, no myomas).
+    let params: organtex::scene::uterus::CavityParams =
+        toml::from_str("seed = 7\nresolution = 4\nwall_thickness = 10.0").expect("params");
+    let cells = TetOptions {
+        cells: Some(30000),
+        ..Default::default()
+    };
+    let w = anchors::uterus_wall(&params, &cells, TextureType::Layered).expect("wall");
+    let (tets, serosa, cavity) = (w.tets, w.options.depth_outer, w.options.depth_inner);
     let c = cake(TextureType::Layered, 2734);
     for (name, mesh, outer, inner, kind) in [
         (

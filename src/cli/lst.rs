@@ -42,7 +42,7 @@ pub struct Args {
     depth_inner: Option<String>,
     /// Object units one patch spans (0, 1a, 2a). Default: a quarter of the
     /// bounding box diagonal.
-    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
+    #[arg(long, value_parser = super::positive_length, allow_negative_numbers = true)]
     scale: Option<f64>,
     /// About this many tetrahedra (default: `organtex tetra`'s default
     /// resolution).
@@ -60,14 +60,6 @@ pub struct Args {
 
 fn parse_type(s: &str) -> std::result::Result<TextureType, String> {
     TextureType::parse(s).map_err(|e| e.to_string())
-}
-
-fn positive(s: &str) -> std::result::Result<f64, String> {
-    s.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .ok_or_else(|| format!("'{s}' is not a positive length"))
 }
 
 #[derive(Deserialize)]

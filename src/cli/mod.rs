@@ -125,6 +125,15 @@ pub fn thousands(n: usize) -> String {
 
 /// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
 /// naming the form expected.
+/// A finite length above 0 (`--edge-length`, `--scale`).
+fn positive_length(s: &str) -> std::result::Result<f64, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .ok_or_else(|| format!("'{s}' is not a positive length"))
+}
+
 fn comma_numbers<T: std::str::FromStr>(
     s: &str,
     n: usize,

@@ -25,7 +25,7 @@ pub struct Args {
     /// Lattice cell size in mesh units (the long edges' length). Default:
     /// the bounding box diagonal / 40, refined until the boundary lies
     /// within 1% of the diagonal from the surface.
-    #[arg(long, conflicts_with = "cells", value_parser = positive, allow_negative_numbers = true)]
+    #[arg(long, conflicts_with = "cells", value_parser = super::positive_length, allow_negative_numbers = true)]
     edge_length: Option<f64>,
     /// About this many tetrahedra instead of an edge length.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100_000_000), allow_negative_numbers = true)]
@@ -39,14 +39,6 @@ pub struct Args {
     /// Print the figures as JSON instead of text.
     #[arg(long)]
     json: bool,
-}
-
-fn positive(s: &str) -> std::result::Result<f64, String> {
-    s.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .ok_or_else(|| format!("'{s}' is not a positive length"))
 }
 
 /// What `--json` prints (and the text shows).

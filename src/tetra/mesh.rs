@@ -79,12 +79,27 @@ impl Attribute {
     }
 }
 
-/// Replace the attribute of `a`'s name in `list`, or append it.
-fn put(list: &mut Vec<Attribute>, a: Attribute) {
+/// Check the attribute against `count` elements (`what`), then replace the
+/// one of its name in `list` or append it.
+fn put(
+    list: &mut Vec<Attribute>,
+    name: &str,
+    components: usize,
+    values: Vec<f64>,
+    count: usize,
+    what: &str,
+) -> Result<()> {
+    let a = Attribute {
+        name: name.into(),
+        components,
+        values,
+    };
+    a.check(count, what)?;
     match list.iter_mut().find(|b| b.name == a.name) {
         Some(b) => *b = a,
         None => list.push(a),
     }
+    Ok(())
 }
 
 /// Element quality over a whole mesh. Angles in degrees.
@@ -165,14 +180,15 @@ impl TetMesh {
         components: usize,
         values: Vec<f64>,
     ) -> Result<()> {
-        let a = Attribute {
-            name: name.into(),
+        let count = self.positions.len();
+        put(
+            &mut self.vertex_attributes,
+            name,
             components,
             values,
-        };
-        a.check(self.positions.len(), "vertices")?;
-        put(&mut self.vertex_attributes, a);
-        Ok(())
+            count,
+            "vertices",
+        )
     }
 
     /// Add (or replace) the tet attribute `name`, as `set_vertex_attribute`.
@@ -182,14 +198,15 @@ impl TetMesh {
         components: usize,
         values: Vec<f64>,
     ) -> Result<()> {
-        let a = Attribute {
-            name: name.into(),
+        let count = self.tets.len();
+        put(
+            &mut self.tet_attributes,
+            name,
             components,
             values,
-        };
-        a.check(self.tets.len(), "tets")?;
-        put(&mut self.tet_attributes, a);
-        Ok(())
+            count,
+            "tets",
+        )
     }
 
     pub fn vertex_attribute(&self, name: &str) -> Option<&Attribute> {

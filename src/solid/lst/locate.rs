@@ -18,8 +18,9 @@ pub struct Locator<'a> {
     /// Cell `c`'s tets are `tets[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     tets: Vec<u32>,
-    /// The tets across each tet's faces (`TetMesh::face_adjacency`).
-    adjacency: Vec<[u32; 4]>,
+    /// The tets across each tet's faces (`TetMesh::face_adjacency`), built
+    /// on the first point outside the mesh.
+    adjacency: std::sync::OnceLock<Vec<[u32; 4]>>,
 }
 
 impl<'a> Locator<'a> {
@@ -85,7 +86,7 @@ impl<'a> Locator<'a> {
             dims,
             start: count,
             tets,
-            adjacency: mesh.face_adjacency().unwrap_or_default(),
+            adjacency: std::sync::OnceLock::new(),
         }
     }
 
@@ -151,11 +152,19 @@ impl<'a> Locator<'a> {
         let Some((_, first)) = nearest else {
             return (0, [0.25; 4]);
         };
+        let adjacency = self
+            .adjacency
+            .get_or_init(|| self.mesh.face_adjacency().unwrap_or_default());
         let mut around = vec![first];
         for _ in 0..2 {
             let ring: Vec<usize> = around
                 .iter()
-                .flat_map(|&t| self.adjacency[t])
+                .flat_map(|&t| {
+                    adjacency
+                        .get(t)
+                        .copied()
+                        .unwrap_or([crate::tetra::mesh::NO_NEIGHBOUR; 4])
+                })
                 .filter(|&n| n != crate::tetra::mesh::NO_NEIGHBOUR)
                 .map(|n| n as usize)
                 .collect();

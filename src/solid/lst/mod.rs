@@ -160,7 +160,6 @@ pub fn fill_stats(
             kind.name()
         )));
     }
-    let locator = locate::Locator::new(mesh);
     let centroids: Vec<DVec3> = (0..mesh.num_tets())
         .map(|t| {
             let c = mesh.corners(t);
@@ -222,6 +221,7 @@ pub fn fill_stats(
     let strokes: Vec<DVec3> = if kind.needs_strokes() {
         let neighbours = fields::vertex_neighbours(mesh);
         let spacing = mean_edge(mesh);
+        let locator = locate::Locator::new(mesh);
         let constraints = fields::stroke_constraints(&opts.strokes, spacing, &locator)?;
         let sigma = match &depth {
             Some(d) => {

@@ -331,3 +331,92 @@ fn layered_walls_align_with_their_depth() {
         );
     }
 }
+
+/// A region (a myoma's ball inside a layered wall) is filled with its own
+/// type: every sample point of every tet still covered; the region's tets
+/// hold only its splotch patches, the rest only depth-band patches, and no
+/// patch crosses the border. Regions that need the depth, overlap or hold
+/// nothing are refused by name.
+#[test]
+fn a_region_gets_its_own_type_and_no_patch_crosses_its_border() {
+    let c = cake(TextureType::Layered, 2734);
+    let ball = lst::regions::Ball {
+        centre: DVec3::ZERO,
+        radius: 0.45,
+        axis: DVec3::Z,
+    };
+    let tets = lst::regions::tets_in_ball(&c.tets, &ball);
+    assert!(tets.len() > 50, "{} tets in the ball", tets.len());
+    let strokes = lst::regions::whorl(&ball, &c.tets.subset(&tets).0);
+    assert!(!strokes.is_empty(), "the whorl has rings inside the ball");
+    let region = lst::Region {
+        name: "myoma".into(),
+        tets: tets.clone(),
+        options: LstOptions {
+            kind: TextureType::Oriented,
+            scale: 0.3,
+            strokes,
+            depth_outer: Vec::new(),
+            depth_inner: Vec::new(),
+            seed: 11,
+        },
+    };
+    let (model, stats) =
+        lst::fill_regions(&c.tets, &c.options, std::slice::from_ref(&region), &Silent)
+            .expect("fill");
+    assert_eq!(stats.len(), 2);
+    eprintln!(
+        "cake 1-b with a 1-a ball: rest {} patches, align median {:.2} p95 {:.2}; ball {} patches, median {:.2} p95 {:.2}",
+        stats[0].patches,
+        stats[0].angle_median,
+        stats[0].angle_p95,
+        stats[1].patches,
+        stats[1].angle_median,
+        stats[1].angle_p95
+    );
+    assert_covered("cake with a ball", &model);
+    let mut inside = vec![false; model.mesh.num_tets()];
+    for &t in &tets {
+        inside[t as usize] = true;
+    }
+    let mut patch_side = std::collections::HashMap::new();
+    for (t, &in_ball) in inside.iter().enumerate() {
+        for l in model.layers_of(t) {
+            assert_eq!(
+                l.mask == MaskKind::Splotch,
+                in_ball,
+                "tet {t} (in the ball: {in_ball}) has a {:?} layer",
+                l.mask
+            );
+            assert_eq!(
+                *patch_side.entry(l.patch).or_insert(in_ball),
+                in_ball,
+                "patch {} crosses the border",
+                l.patch
+            );
+        }
+    }
+    // The file keeps the mix.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("mixed.lst");
+    model.write(&path).expect("write");
+    assert_eq!(LstModel::read(&path).expect("read"), model);
+
+    let refused = |regions: &[lst::Region]| {
+        lst::fill_regions(&c.tets, &c.options, regions, &Silent)
+            .expect_err("must fail")
+            .to_string()
+    };
+    let mut layered = region.clone();
+    layered.options.kind = TextureType::Layered;
+    let e = refused(std::slice::from_ref(&layered));
+    assert!(e.contains("'myoma'") && e.contains("depth"), "{e}");
+    let mut twin = region.clone();
+    twin.name = "twin".into();
+    let e = refused(&[region.clone(), twin]);
+    assert!(e.contains("'myoma' and 'twin'"), "{e}");
+    let mut empty = region.clone();
+    empty.tets.clear();
+    let e = refused(&[empty]);
+    assert!(e.contains("holds no tets"), "{e}");
+}

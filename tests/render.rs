@@ -272,3 +272,142 @@ fn a_preview_the_gpu_cannot_draw_is_a_warning_not_a_panic() {
     let why = report["preview_error"].as_str().unwrap_or_default();
     assert!(why.contains("GPU error"), "report.json: {why}");
 }
+
+/// An LST cut drawn by the WGSL path (solid::lst::gpu) shows the colours
+/// `LstInterior` gives on the CPU: the camera looks straight at a plane
+/// cut through a layered cake (1-b, depth bands) and an isotropic kiwi (0,
+/// splotches); each pixel's ray meets the plane at a point whose CPU
+/// colour, lit as cut.wgsl lights it, is the expected pixel. An exemplar
+/// of random voxels makes any misplaced coordinate show.
+#[test]
+fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
+    use organtex::solid::lst::{
+        LstInterior, TextureType, anchors, gpu::CutBuffers, locate::Locator,
+    };
+    let gpu = gpu();
+    let n = 16;
+    let exemplar = Volume {
+        size: [n, n, n],
+        spacing: 1.0,
+        voxels: (0..(n * n * n) as u64)
+            .map(|i| [0, 1, 2].map(|c| organtex::rng::below(3, &[i, c], 256) as u8))
+            .collect(),
+    };
+    let renderer = Renderer::new(&gpu.device);
+    let decode = |c: f64| {
+        let c = c / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let encode = |l: f64| {
+        let l = l.clamp(0.0, 1.0);
+        255.0
+            * if l <= 0.0031308 {
+                l * 12.92
+            } else {
+                1.055 * l.powf(1.0 / 2.4) - 0.055
+            }
+    };
+    for anchor in [
+        anchors::cake(TextureType::Layered, 1500).unwrap(),
+        anchors::kiwi(TextureType::Isotropic, 1500).unwrap(),
+    ] {
+        let model = organtex::solid::lst::fill(&anchor.tets, &anchor.options, &Silent).unwrap();
+        let interior = LstInterior::new(&model, &exemplar).unwrap();
+        let (lo, hi) = anchor.surface.bounding_box().unwrap();
+        let z = 0.5 * (lo.z + hi.z) + 0.013 * (hi.z - lo.z);
+        let cut = organtex::tetra::march::plane_cut(&model.mesh, DVec3::Z, z);
+        let mut buffers = CutBuffers::default();
+        buffers.add(&model, &cut, DVec3::Z);
+        let mut scene =
+            GpuScene::new(&renderer, &gpu.device, &gpu.queue, &DrawList::default()).unwrap();
+        scene
+            .set_block(
+                &renderer,
+                &gpu.device,
+                &gpu.queue,
+                &exemplar,
+                &Placement::new(lo, 1.0).unwrap(),
+            )
+            .unwrap();
+        scene
+            .set_lst_cut(&renderer, &gpu.device, Some(&buffers))
+            .unwrap();
+        let mut camera = OrbitCamera::fit(lo, hi);
+        camera.yaw = 0.0;
+        camera.pitch = 0.0;
+        let size = 256u32;
+        let target = Offscreen::new(&gpu, &renderer, [size, size]);
+        let view = View {
+            camera,
+            layers: Layers::default(),
+            clip: None,
+        };
+        target.draw(&renderer, &gpu.device, &gpu.queue, &scene, &view);
+        let img = target.read(&gpu.device, &gpu.queue).unwrap();
+
+        // The ray through a point of the image (aspect 1), met with the
+        // plane.
+        let eye = camera.eye();
+        let forward = (camera.target - eye).normalize();
+        let (right, up) = camera.right_up();
+        let tan = (camera.fov.to_radians() / 2.0).tan();
+        let locator = Locator::new(&model.mesh);
+        let on_plane = |px: f64, py: f64| {
+            let x = px / size as f64 * 2.0 - 1.0;
+            let y = 1.0 - py / size as f64 * 2.0;
+            let dir = forward + tan * (x * right + y * up);
+            eye + dir * ((z - eye.z) / dir.z)
+        };
+        let (mut compared, mut sum, mut far) = (0usize, 0.0, 0usize);
+        for py in 0..size {
+            for px in 0..size {
+                // Inside the cut, away from its rim (where the pixel's
+                // footprint leaves the mesh).
+                let p = on_plane(px as f64 + 0.5, py as f64 + 0.5);
+                let rim =
+                    [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                        .iter()
+                        .any(|&(dx, dy)| {
+                            locator
+                                .locate(on_plane(px as f64 + dx, py as f64 + dy))
+                                .is_none()
+                        });
+                let Some((t, b)) = locator.locate(p).filter(|_| !rim) else {
+                    continue;
+                };
+                let c = interior.colour_in(t, b);
+                let to_eye = eye - p;
+                let d = to_eye.length();
+                let falloff = 1.0 / (1.0 + (d / (1.5 * camera.distance)).powi(2));
+                let light = (0.15 + 0.85 * (to_eye.z / d).abs()) * (0.4 + 1.2 * falloff);
+                let got = img.get_pixel(px, py);
+                for k in 0..3 {
+                    let want = encode(decode(c[k] as f64) * light);
+                    let diff = (got[k] as f64 - want).abs();
+                    sum += diff;
+                    far += (diff > 6.0) as usize;
+                }
+                compared += 1;
+            }
+        }
+        let mean = sum / (3 * compared.max(1)) as f64;
+        eprintln!(
+            "LST cut type {}: {compared} pixels compared, mean |GPU - CPU| {mean:.3}, {far} channels off by > 6",
+            model.kind.name()
+        );
+        assert!(
+            compared > 5000,
+            "the cut covers the view ({compared} pixels)"
+        );
+        assert!(mean < 1.0, "mean |GPU - CPU| {mean:.3} of 255");
+        assert!(
+            (far as f64) < 0.01 * (3 * compared) as f64,
+            "{far} of {} channels off by more than 6",
+            3 * compared
+        );
+    }
+}

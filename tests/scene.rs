@@ -373,6 +373,30 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     let model = organtex::solid::lst::LstModel::read(&out.path().join(&l.file)).unwrap();
     assert_eq!(model.mesh.tets, tets.tets);
     assert!((0..model.mesh.num_tets()).all(|t| !model.layers_of(t).is_empty()));
+    // Each myoma a region of whorled fibres (1a, splotch masks) inside the
+    // layered wall: exactly the regions' tets hold splotch layers.
+    let regions: Vec<(&str, &str)> = l
+        .regions
+        .iter()
+        .map(|r| (r.facet.as_str(), r.kind))
+        .collect();
+    assert_eq!(regions, [("myoma-front", "1a"), ("myoma-back", "1a")]);
+    assert!(
+        l.regions
+            .iter()
+            .all(|r| r.tets > 100 && r.stats.patches > 0),
+        "{:?}",
+        l.regions
+    );
+    let fibrous = (0..model.mesh.num_tets())
+        .filter(|&t| {
+            model
+                .layers_of(t)
+                .iter()
+                .any(|l| l.mask == organtex::solid::lst::MaskKind::Splotch)
+        })
+        .count();
+    assert_eq!(fibrous, l.regions.iter().map(|r| r.tets).sum::<usize>());
     let lapped = organtex::solid::lst::LstInterior::new(&model, &block).unwrap();
     let cut = organtex::tetra::march::plane_cut(&model.mesh, glam::DVec3::X, 0.0);
     assert!(cut.triangles.len() > 1000, "{}", cut.triangles.len());

@@ -182,6 +182,12 @@ fn the_clinician_flow() {
         h.state().message
     );
     assert!(h.state().message.is_none(), "{:?}", h.state().message);
+    // The scene laps the wall ([node.interior.lst]): its section is drawn
+    // by the LST shader.
+    assert!(
+        h.state().lst_cut_triangles() > 0,
+        "the wall's lapped solid texture is cut"
+    );
     let with_cut = h.state().read_scene().unwrap();
     // Ctrl-drag moves the plane.
     let at = h.state().cut.at;

@@ -71,13 +71,21 @@ struct TissueEntry {
 
 type Thumbnails = Vec<(String, String, Option<egui::ColorImage>)>;
 
+/// What the cut plane shows inside: the interior block, and per node its
+/// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
+/// laid as the bake lays it, the block as exemplar).
+struct Interiors {
+    block: Volume,
+    lst: Vec<Option<crate::solid::lst::LstModel>>,
+}
+
 #[derive(Default)]
 struct Jobs {
     open: Option<Job<Document>>,
     unwrap: Option<Job<BakedScene>>,
     tissues: Option<Job<Tissues>>,
     thumbnails: Option<Job<Thumbnails>>,
-    block: Option<Job<Volume>>,
+    block: Option<Job<Interiors>>,
     bake: Option<Job<PathBuf>>,
 }
 
@@ -117,6 +125,9 @@ pub struct Viewer {
     pub selected: Option<(usize, usize)>,
     pub mode: Mode,
     pub cut: CutPlane,
+    /// Per node, its lapped solid texture (cuts through it are coloured
+    /// by the LST shader, not the block).
+    lst: Vec<Option<crate::solid::lst::LstModel>>,
     /// The cut plane the section was last made for.
     cut_made: Option<([f64; 3], f64)>,
     pub message: Option<Message>,
@@ -181,6 +192,7 @@ impl Viewer {
                 normal: DVec3::X,
                 at: 0.5,
             },
+            lst: Vec::new(),
             cut_made: None,
             message: None,
             tissues: Vec::new(),
@@ -359,6 +371,7 @@ impl Viewer {
                     self.selected = Some((0, 0));
                     // A new scene starts without the old interior block.
                     self.scene = None;
+                    self.lst.clear();
                     self.cut.on = false;
                     self.message = None;
                     self.rebuild_list();
@@ -436,7 +449,10 @@ impl Viewer {
         if let Some(r) = self.jobs.block.as_mut().and_then(Job::poll) {
             self.jobs.block = None;
             match r {
-                Ok(volume) => self.set_block(volume),
+                Ok(interiors) => {
+                    self.lst = interiors.lst;
+                    self.set_block(interiors.block)
+                }
                 Err(Error::Cancelled) => self.cut.on = false,
                 Err(e) => {
                     self.cut.on = false;
@@ -523,6 +539,19 @@ impl Viewer {
             return;
         };
         let database = doc.spec.database.clone();
+        // The nodes to lap: their name, surface, interior settings.
+        let lapped: Vec<_> = doc
+            .spec
+            .nodes
+            .iter()
+            .zip(&doc.meshes)
+            .map(|(n, mesh)| {
+                n.interior
+                    .as_ref()
+                    .filter(|i| i.lst.is_some())
+                    .map(|i| (n.name.clone(), mesh.clone(), i.clone()))
+            })
+            .collect();
         self.jobs.block = Some(Job::spawn(
             "interior solid texture",
             self.wake(),
@@ -532,13 +561,41 @@ impl Viewer {
                 if !crate::db::build::is_current(&db, t)? {
                     crate::db::build(&db, std::slice::from_ref(&tissue), p)?;
                 }
-                interior_block(
+                let block = interior_block(
                     &db.output_path(&tissue, crate::db::Output::Colour),
                     32,
                     method,
                     0,
                     p,
-                )
+                )?;
+                let lst = lapped
+                    .iter()
+                    .enumerate()
+                    .map(|(k, node)| {
+                        let Some((name, surface, interior)) = node else {
+                            return Ok(None);
+                        };
+                        let spec = interior.lst.as_ref().expect("filtered on lst");
+                        let (tets, _) = crate::tetra::tetrahedralise_report(
+                            surface,
+                            &crate::tetra::TetOptions::default(),
+                            p,
+                        )
+                        .map_err(|e| Error::invalid(format!("node '{name}': tet mesh: {e}")))?;
+                        // The bake's seed, so the cut shows what it bakes.
+                        let (model, _, _) = crate::scene::bake::lap(
+                            spec,
+                            surface,
+                            &tets,
+                            interior.block_size,
+                            k as u64,
+                            name,
+                            p,
+                        )?;
+                        Ok(Some(model))
+                    })
+                    .collect::<Result<_>>()?;
+                Ok(Interiors { block, lst })
             },
         ));
     }
@@ -590,6 +647,8 @@ impl Viewer {
         };
         let Some((normal, offset)) = plane else {
             scene.set_cut(&self.gpu.device, None);
+            // Setting none cannot fail.
+            let _ = scene.set_lst_cut(&self.renderer, &self.gpu.device, None);
             return;
         };
         let mut cut = CutMesh {
@@ -598,7 +657,13 @@ impl Viewer {
             triangles: Vec::new(),
         };
         let mut problem = None;
+        let mut lst_cut = crate::solid::lst::gpu::CutBuffers::default();
         for (k, (mesh, topology)) in doc.closed.iter().enumerate() {
+            if let Some(Some(model)) = self.lst.get(k) {
+                let c = crate::tetra::march::plane_cut(&model.mesh, normal, offset);
+                lst_cut.add(model, &c, normal);
+                continue;
+            }
             let section = Plane::new(normal, offset).and_then(|p| plane_section(mesh, topology, p));
             match section {
                 Ok(s) => {
@@ -613,6 +678,9 @@ impl Viewer {
             }
         }
         scene.set_cut(&self.gpu.device, Some(&cut));
+        if let Err(e) = scene.set_lst_cut(&self.renderer, &self.gpu.device, Some(&lst_cut)) {
+            problem = Some(e.to_string());
+        }
         if let Some(p) = problem {
             self.error(format!("cannot cut: {p}"));
         }
@@ -690,6 +758,11 @@ impl Viewer {
     /// Triangles of the cut surface drawn.
     pub fn cut_triangles(&self) -> usize {
         self.scene.as_ref().map_or(0, GpuScene::cut_triangles)
+    }
+
+    /// Of those, the ones through lapped solid textures.
+    pub fn lst_cut_triangles(&self) -> usize {
+        self.scene.as_ref().map_or(0, GpuScene::lst_cut_triangles)
     }
 
     /// The last frame drawn, read back (tests).

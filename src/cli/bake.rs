@@ -159,6 +159,15 @@ fn print(baked: &Baked) {
                 l.bytes as f64 / 1e6,
                 l.seconds
             );
+            for r in &l.regions {
+                println!(
+                    "        region '{}', type {}: {} patches over {} tets",
+                    r.facet,
+                    r.kind,
+                    r.stats.patches,
+                    super::thousands(r.tets)
+                );
+            }
         }
     }
 }

@@ -1,6 +1,7 @@
 // Cut surfaces: each point coloured from the organ's interior solid
-// texture (block_colour, from solid/sample_block.wgsl, prepended to this
-// file), lit like the facets.
+// texture (block_colour, from solid/sample_block.wgsl, or lst_colour, from
+// solid/lst/sample.wgsl, both prepended to this file), lit like the
+// facets.
 
 struct Globals {
     view_proj: mat4x4<f32>,
@@ -37,11 +38,53 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
-@fragment
-fn fs_cut(in: CutOut) -> @location(0) vec4<f32> {
-    let to_eye = globals.eye.xyz - in.world;
+// The headlamp's light on a cut at `world` facing `normal`.
+fn cut_light(world: vec3<f32>, normal: vec3<f32>) -> f32 {
+    let to_eye = globals.eye.xyz - world;
     let d = length(to_eye);
     let falloff = 1.0 / (1.0 + pow(d / (1.5 * globals.eye.w), 2.0));
-    let light = (0.15 + 0.85 * abs(dot(normalize(in.normal), to_eye / max(d, 1e-20)))) * (0.4 + 1.2 * falloff);
-    return vec4<f32>(srgb_to_linear(block_colour(in.world)) * light, 1.0);
+    return (0.15 + 0.85 * abs(dot(normalize(normal), to_eye / max(d, 1e-20)))) * (0.4 + 1.2 * falloff);
+}
+
+@fragment
+fn fs_cut(in: CutOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(srgb_to_linear(block_colour(in.world)) * cut_light(in.world, in.normal), 1.0);
+}
+
+// Cuts through a lapped solid texture (sample.wgsl of solid::lst): each
+// triangle lies in one tet, so the barycentric coordinates and depth
+// interpolate exactly and the tet's slot is flat.
+struct LstCutIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) bary: vec4<f32>,
+    @location(3) depth: f32,
+    @location(4) slot: u32,
+}
+
+struct LstCutOut {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) bary: vec4<f32>,
+    @location(3) depth: f32,
+    @location(4) @interpolate(flat) slot: u32,
+}
+
+@vertex
+fn vs_lst_cut(v: LstCutIn) -> LstCutOut {
+    var out: LstCutOut;
+    out.clip_position = globals.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.bary = v.bary;
+    out.depth = v.depth;
+    out.slot = v.slot;
+    return out;
+}
+
+@fragment
+fn fs_lst_cut(in: LstCutOut) -> @location(0) vec4<f32> {
+    let c = lst_colour(in.slot, in.bary, in.depth);
+    return vec4<f32>(srgb_to_linear(c) * cut_light(in.world, in.normal), 1.0);
 }

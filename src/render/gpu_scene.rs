@@ -57,6 +57,15 @@ pub(super) struct GpuCut {
 pub(super) struct GpuBlock {
     /// Holds the block texture and its placement uniform alive.
     pub bind_group: wgpu::BindGroup,
+    /// The block, also the exemplar of LST cuts.
+    pub view: wgpu::TextureView,
+}
+
+pub(super) struct GpuLstCut {
+    pub vertices: wgpu::Buffer,
+    pub vertex_count: u32,
+    /// The exemplar and the layer buffers.
+    pub bind_group: wgpu::BindGroup,
 }
 
 /// A scene ready to draw.
@@ -64,6 +73,7 @@ pub struct GpuScene {
     pub(super) primitives: Vec<GpuPrimitive>,
     pub(super) materials: Vec<GpuMaterial>,
     pub(super) cut: Option<GpuCut>,
+    pub(super) lst_cut: Option<GpuLstCut>,
     pub(super) block: Option<GpuBlock>,
     /// Bounds of everything drawn.
     pub bounds: Option<(DVec3, DVec3)>,
@@ -364,6 +374,7 @@ impl GpuScene {
             primitives,
             materials,
             cut: None,
+            lst_cut: None,
             block: None,
             bounds: lo.cmple(hi).all().then_some((lo, hi)),
         })
@@ -435,7 +446,7 @@ impl GpuScene {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let bind_group = renderer.block_bind_group(device, &view, &placement);
-        self.block = Some(GpuBlock { bind_group });
+        self.block = Some(GpuBlock { bind_group, view });
         Ok(())
     }
 
@@ -443,8 +454,63 @@ impl GpuScene {
         self.block.is_some()
     }
 
+    /// Triangles of the cut surfaces, block and LST.
     pub fn cut_triangles(&self) -> usize {
         self.cut.as_ref().map_or(0, |c| c.index_count as usize / 3)
+            + self
+                .lst_cut
+                .as_ref()
+                .map_or(0, |c| c.vertex_count as usize / 3)
+    }
+
+    /// Triangles of the cuts through lapped solid textures.
+    pub fn lst_cut_triangles(&self) -> usize {
+        self.lst_cut
+            .as_ref()
+            .map_or(0, |c| c.vertex_count as usize / 3)
+    }
+
+    /// Replace the cuts through lapped solid textures (None or no
+    /// triangles: none drawn). Their exemplar is the interior block, so
+    /// one must be set.
+    pub fn set_lst_cut(
+        &mut self,
+        renderer: &Renderer,
+        device: &wgpu::Device,
+        cut: Option<&crate::solid::lst::gpu::CutBuffers>,
+    ) -> Result<()> {
+        self.lst_cut = None;
+        let Some(cut) = cut.filter(|c| c.vertex_count() > 0) else {
+            return Ok(());
+        };
+        let block = self.block.as_ref().ok_or_else(|| {
+            crate::Error::invalid("an LST cut needs the interior block, its exemplar, set first")
+        })?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let tets = buffer(device, "lst tets", bytemuck::cast_slice(&cut.tets), storage);
+        let layers = buffer(
+            device,
+            "lst layers",
+            bytemuck::cast_slice(&cut.layers),
+            storage,
+        );
+        let waves = buffer(
+            device,
+            "lst waves",
+            bytemuck::cast_slice(&cut.waves),
+            storage,
+        );
+        self.lst_cut = Some(GpuLstCut {
+            vertices: buffer(
+                device,
+                "lst cut",
+                bytemuck::cast_slice(&cut.vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            vertex_count: cut.vertex_count(),
+            bind_group: renderer.lst_bind_group(device, &block.view, [&tets, &layers, &waves]),
+        });
+        Ok(())
     }
 
     /// Take over `old`'s interior block (a scene rebuilt keeps it).

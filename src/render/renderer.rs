@@ -59,6 +59,7 @@ pub struct Renderer {
     globals_group: wgpu::BindGroup,
     material_layout: wgpu::BindGroupLayout,
     block_layout: wgpu::BindGroupLayout,
+    lst_layout: wgpu::BindGroupLayout,
     samplers: [wgpu::Sampler; 3],
     block_sampler: wgpu::Sampler,
     /// Facet triangles, opaque and blended over, each drawn from both
@@ -68,6 +69,8 @@ pub struct Renderer {
     wire: wgpu::RenderPipeline,
     seam: wgpu::RenderPipeline,
     cut: wgpu::RenderPipeline,
+    /// Cuts through lapped solid textures (solid::lst::gpu).
+    lst_cut: wgpu::RenderPipeline,
     /// Copies a frame into a plain-bytes texture for egui where the
     /// device cannot view one texture in two formats (`Offscreen`).
     encode_layout: wgpu::BindGroupLayout,
@@ -147,17 +150,31 @@ fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
 }
 
 /// Facet shader and cut shader sources. The cut shader includes the
-/// block sampler the library ships for simulators, so both draw cuts the
-/// same way.
+/// block and LST samplers the library ships for simulators, so both draw
+/// cuts the same way.
 pub(crate) fn shader_sources() -> [String; 2] {
     [
         include_str!("facet.wgsl").to_string(),
         format!(
-            "{}\n{}",
+            "{}\n{}\n{}",
             crate::solid::SAMPLE_BLOCK_WGSL,
+            crate::solid::lst::gpu::sample_lst_wgsl(),
             include_str!("cut.wgsl")
         ),
     ]
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
 }
 
 impl Renderer {
@@ -194,6 +211,16 @@ impl Renderer {
                 uniform_entry(2, wgpu::ShaderStages::VERTEX_FRAGMENT),
             ],
         });
+        let lst_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lst"),
+            entries: &[
+                texture_entry(0, wgpu::TextureViewDimension::D3),
+                sampler_entry(1),
+                storage_entry(2),
+                storage_entry(3),
+                storage_entry(4),
+            ],
+        });
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
             size: 4 * 28,
@@ -218,6 +245,11 @@ impl Renderer {
             bind_group_layouts: &[Some(&globals_layout), Some(&block_layout)],
             immediate_size: 0,
         });
+        let lst_cut_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lst cut"),
+            bind_group_layouts: &[Some(&globals_layout), None, Some(&lst_layout)],
+            immediate_size: 0,
+        });
         let attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32, 4 => Float32x4, 5 => Float32
         ];
@@ -231,6 +263,14 @@ impl Renderer {
             array_stride: 24,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &cut_attributes,
+        })];
+        let lst_attributes = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32, 4 => Uint32
+        ];
+        let lst_vertices = [Some(wgpu::VertexBufferLayout {
+            array_stride: (crate::solid::lst::gpu::VERTEX_WORDS * 4) as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &lst_attributes,
         })];
         let pipeline = |label: &str,
                         layout: &wgpu::PipelineLayout,
@@ -335,12 +375,23 @@ impl Renderer {
                 false,
                 false,
             ),
+            lst_cut: pipeline(
+                "lst cut",
+                &lst_cut_layout,
+                &cut_module,
+                ("vs_lst_cut", "fs_lst_cut"),
+                &lst_vertices,
+                tri,
+                false,
+                false,
+            ),
             encode_layout,
             encode,
             globals,
             globals_group,
             material_layout,
             block_layout,
+            lst_layout,
             samplers: [
                 sampler(device, wgpu::AddressMode::Repeat),
                 sampler(device, wgpu::AddressMode::MirrorRepeat),
@@ -387,6 +438,42 @@ impl Renderer {
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::Sampler(&self.samplers[0]),
+                },
+            ],
+        })
+    }
+
+    /// The LST cut's bind group: the exemplar (the block's texture, as
+    /// the block sampler wraps it) and the three storage buffers.
+    pub(super) fn lst_bind_group(
+        &self,
+        device: &wgpu::Device,
+        exemplar: &wgpu::TextureView,
+        [tets, layers, waves]: [&wgpu::Buffer; 3],
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lst"),
+            layout: &self.lst_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(exemplar),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&self.block_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: tets.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: layers.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: waves.as_entire_binding(),
                 },
             ],
         })
@@ -514,6 +601,12 @@ impl Renderer {
             pass.set_vertex_buffer(0, cut.vertices.slice(..));
             pass.set_index_buffer(cut.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..cut.index_count, 0, 0..1);
+        }
+        if let Some(cut) = &scene.lst_cut {
+            pass.set_pipeline(&self.lst_cut);
+            pass.set_bind_group(2, &cut.bind_group, &[]);
+            pass.set_vertex_buffer(0, cut.vertices.slice(..));
+            pass.draw(0..cut.vertex_count, 0..1);
         }
     }
 }

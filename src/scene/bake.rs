@@ -78,9 +78,23 @@ pub struct LstLine {
     pub kind: &'static str,
     pub tets: usize,
     pub bytes: u64,
+    /// Of the tets outside every region.
     #[serde(flatten)]
     pub stats: crate::solid::lst::FillStats,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<LstRegionLine>,
     pub seconds: f64,
+}
+
+/// A region of a lapped solid texture (`[[node.interior.lst.region]]`).
+#[derive(Clone, Debug, Serialize)]
+pub struct LstRegionLine {
+    pub facet: String,
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    pub tets: usize,
+    #[serde(flatten)]
+    pub stats: crate::solid::lst::FillStats,
 }
 
 /// A node's tetrahedral mesh (`[node.interior] tet_mesh = true`).
@@ -421,6 +435,37 @@ fn lapped(
     node: &str,
     progress: &dyn Progress,
 ) -> Result<(LstLine, crate::solid::lst::LstModel)> {
+    let start = std::time::Instant::now();
+    let (model, stats, regions) = lap(spec, surface, tets, block_size, seed, node, progress)?;
+    let line = LstLine {
+        file: block_file.with_extension("lst"),
+        kind: model.kind.name(),
+        tets: tets.num_tets(),
+        bytes: model.file_size(),
+        stats,
+        regions,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok((line, model))
+}
+
+/// Lap a node's block through its tets as `[node.interior.lst]` asks
+/// (the bake's and the viewer's cut plane's): the model, the stats of
+/// the tets outside every region, and each region's line. Errors name
+/// the node.
+pub fn lap(
+    spec: &crate::scene::file::LstSpec,
+    surface: &crate::mesh::TriMesh,
+    tets: &crate::tetra::TetMesh,
+    block_size: f64,
+    seed: u64,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(
+    crate::solid::lst::LstModel,
+    crate::solid::lst::FillStats,
+    Vec<LstRegionLine>,
+)> {
     use crate::solid::lst;
     let err = |e: Error| Error::invalid(format!("node '{node}': [node.interior.lst]: {e}"));
     let kind = lst::TextureType::parse(&spec.kind).map_err(err)?;
@@ -434,9 +479,10 @@ fn lapped(
             ))));
         }
     };
+    let scale = spec.scale.unwrap_or(block_size);
     let opts = lst::LstOptions {
         kind,
-        scale: spec.scale.unwrap_or(block_size),
+        scale,
         strokes: spec
             .strokes
             .iter()
@@ -446,17 +492,37 @@ fn lapped(
         depth_inner,
         seed,
     };
-    let start = std::time::Instant::now();
-    let (model, stats) = lst::fill_stats(tets, &opts, progress).map_err(err)?;
-    let line = LstLine {
-        file: block_file.with_extension("lst"),
-        kind: kind.name(),
-        tets: tets.num_tets(),
-        bytes: model.file_size(),
-        stats,
-        seconds: start.elapsed().as_secs_f64(),
-    };
-    Ok((line, model))
+    let wanted = spec
+        .regions
+        .iter()
+        .map(|r| {
+            Ok(lst::regions::FacetRegion {
+                facet: r.facet.clone(),
+                kind: lst::TextureType::parse(&r.kind)?,
+                scale: r.scale.unwrap_or(scale),
+                strokes: r
+                    .strokes
+                    .iter()
+                    .map(|s| s.iter().map(|&p| glam::DVec3::from_array(p)).collect())
+                    .collect(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()
+        .map_err(err)?;
+    let regions = lst::regions::facet_regions(surface, tets, &wanted, seed).map_err(err)?;
+    let (model, mut stats) = lst::fill_regions(tets, &opts, &regions, progress).map_err(err)?;
+    let main = stats.remove(0);
+    let lines = regions
+        .iter()
+        .zip(stats)
+        .map(|(r, stats)| LstRegionLine {
+            facet: r.name.clone(),
+            kind: r.options.kind.name(),
+            tets: r.tets.len(),
+            stats,
+        })
+        .collect();
+    Ok((model, main, lines))
 }
 
 /// A node's interior as baked: its report line, block, tet mesh and

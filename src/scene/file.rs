@@ -162,6 +162,32 @@ pub struct LstSpec {
     /// size).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<f64>,
+    /// `[[node.interior.lst.region]]`: parts lapped with a texture of
+    /// their own, such as a myoma's whorled fibres in the layered wall.
+    #[serde(default, rename = "region", skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionSpec>,
+}
+
+/// A region of the interior: the ball fitted to a facet (a myoma's), with
+/// its own texture type.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    pub facet: String,
+    /// "0" or "1a" (the default: fibres).
+    #[serde(rename = "type", default = "default_region_type")]
+    pub kind: String,
+    /// Polylines the fibres follow (1a; default: rings round the facet's
+    /// axis, a myoma's whorl).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strokes: Vec<Vec<[f64; 3]>>,
+    /// Mesh units one patch spans (default: the lst's scale).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+}
+
+fn default_region_type() -> String {
+    "1a".into()
 }
 
 fn default_block_size() -> f64 {
@@ -599,8 +625,32 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                     kind.name()
                 )));
             }
+            for (k, r) in lst.regions.iter().enumerate() {
+                let bad = |msg: String| bad(format!("region {} ('{}'): {msg}", k + 1, r.facet));
+                let kind = crate::solid::lst::TextureType::parse(&r.kind)
+                    .map_err(|e| bad(e.to_string()))?;
+                if kind.needs_depth() {
+                    return Err(bad(format!(
+                        "type {} needs the depth field; a region takes type 0 or 1a",
+                        kind.name()
+                    )));
+                }
+                if let Some(scale) = r.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
+                    return Err(bad(format!(
+                        "scale must be a positive number of mesh units, not {scale}"
+                    )));
+                }
+                if lst.regions[..k].iter().any(|o| o.facet == r.facet) {
+                    return Err(bad("the facet has a region already".into()));
+                }
+            }
             let known: Vec<&str> = facets.iter().map(|f| f.name.as_str()).collect();
-            for f in [&lst.depth_outer, &lst.depth_inner].into_iter().flatten() {
+            let region_facets = lst.regions.iter().map(|r| &r.facet);
+            for f in [&lst.depth_outer, &lst.depth_inner]
+                .into_iter()
+                .flatten()
+                .chain(region_facets)
+            {
                 // With a "*" facet the mesh's own names decide (at the bake).
                 if !known.contains(&f.as_str()) && !known.contains(&"*") {
                     return Err(bad(format!(

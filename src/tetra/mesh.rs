@@ -172,6 +172,32 @@ impl TetMesh {
             .sum()
     }
 
+    /// The tets `tets` (in that order) as a mesh of their own, and for each
+    /// of its vertices the vertex it was here. Attributes are not carried.
+    pub fn subset(&self, tets: &[u32]) -> (TetMesh, Vec<u32>) {
+        let mut new_of = vec![u32::MAX; self.num_vertices()];
+        let mut old_of = Vec::new();
+        let sub = tets
+            .iter()
+            .map(|&t| {
+                self.tets[t as usize].map(|v| {
+                    let n = &mut new_of[v as usize];
+                    if *n == u32::MAX {
+                        *n = old_of.len() as u32;
+                        old_of.push(v);
+                    }
+                    *n
+                })
+            })
+            .collect();
+        let mesh = TetMesh {
+            positions: old_of.iter().map(|&v| self.positions[v as usize]).collect(),
+            tets: sub,
+            ..Default::default()
+        };
+        (mesh, old_of)
+    }
+
     /// Add (or replace) the vertex attribute `name`; errors on a bad name or
     /// a value count that is not `components` per vertex.
     pub fn set_vertex_attribute(

@@ -12,15 +12,15 @@ use crate::rng;
 pub const FALLOFF: f64 = 0.075;
 /// The blob's mean radius; with the wander below it stays inside the unit
 /// cube, so no patch shows the texture's wrap.
-const RADIUS: f64 = 0.4;
+pub(super) const RADIUS: f64 = 0.4;
 /// Relative wander of the radius with direction.
-const WANDER: f64 = 0.12;
+pub(super) const WANDER: f64 = 0.12;
 /// Depth bands of the three layered masks (outer ends at `BAND_OUTER`,
 /// middle spans `BAND_MIDDLE`, inner starts at `BAND_INNER`), overlapping
 /// so every depth is fully inside one of them.
-const BAND_OUTER: f64 = 0.4;
-const BAND_MIDDLE: (f64, f64) = (0.3, 0.7);
-const BAND_INNER: f64 = 0.6;
+pub(super) const BAND_OUTER: f64 = 0.4;
+pub(super) const BAND_MIDDLE: (f64, f64) = (0.3, 0.7);
+pub(super) const BAND_INNER: f64 = 0.6;
 
 /// Which mask a patch uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -90,6 +90,11 @@ impl Splotch {
             })
             .collect();
         Splotch { waves }
+    }
+
+    /// Its waves: direction times frequency, phase, amplitude.
+    pub fn waves(&self) -> &[([f64; 3], f64, f64)] {
+        &self.waves
     }
 
     /// The blob's radius towards the unit direction `d`.

@@ -11,7 +11,11 @@
 //! - `paste`: seed, clump, least-squares texture coordinates, coverage;
 //! - `model`: the result and its `.lst` file;
 //! - `sample`: colours at points, as a `solid::Interior`;
-//! - `locate`: which tet holds a point.
+//! - `gpu`: the same colours on cut surfaces in WGSL, and the buffers it
+//!   reads;
+//! - `locate`: which tet holds a point;
+//! - `regions`: parts of the organ lapped with a texture of their own
+//!   (a myoma's whorled fibres in the layered wall).
 //!
 //! The five texture types (seed 000, sec. 3-4), texture axes (r, s, t):
 //! - 0, isotropic: each patch turned at random, scale given;
@@ -24,10 +28,12 @@
 
 pub mod anchors;
 pub mod fields;
+pub mod gpu;
 pub mod locate;
 pub mod mask;
 pub mod model;
 pub mod paste;
+pub mod regions;
 pub mod sample;
 
 use glam::{DMat3, DQuat, DVec3};
@@ -131,6 +137,19 @@ pub struct FillStats {
     pub angle_max: f64,
 }
 
+/// A part of the mesh filled with options of its own. Seed 000 laps one
+/// texture through a mesh; an organ holds several tissues, such as a
+/// myoma's whorled fibres inside the layered uterine wall. Patches do not
+/// cross a region's border (a myoma's pseudo-capsule is a sharp one).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Region {
+    pub name: String,
+    /// Its tets, which no other region holds.
+    pub tets: Vec<u32>,
+    /// Types 0 and 1-a: the depth field is the organ's, not a region's.
+    pub options: LstOptions,
+}
+
 /// Fill `mesh` with patches; see the module's comment.
 pub fn fill(mesh: &TetMesh, opts: &LstOptions, progress: &dyn Progress) -> Result<LstModel> {
     fill_stats(mesh, opts, progress).map(|(m, _)| m)
@@ -142,10 +161,175 @@ pub fn fill_stats(
     opts: &LstOptions,
     progress: &dyn Progress,
 ) -> Result<(LstModel, FillStats)> {
-    if mesh.num_tets() == 0 {
+    fill_regions(mesh, opts, &[], progress).map(|(m, mut s)| (m, s.swap_remove(0)))
+}
+
+/// Fill the tets of each region with its options and the rest of `mesh`
+/// with `main`'s, as one model; the stats of the rest, then of each
+/// region. The mask's shape follows `main.seed` everywhere.
+pub fn fill_regions(
+    mesh: &TetMesh,
+    main: &LstOptions,
+    regions: &[Region],
+    progress: &dyn Progress,
+) -> Result<(LstModel, Vec<FillStats>)> {
+    let nt = mesh.num_tets();
+    if nt == 0 {
         return Err(Error::invalid("the tet mesh is empty: nothing to fill"));
     }
     mesh.validate()?;
+    let mut part_of = vec![0usize; nt];
+    for (k, r) in regions.iter().enumerate() {
+        if r.options.kind.needs_depth() {
+            return Err(Error::invalid(format!(
+                "region '{}': type {} needs the depth field; a region takes type 0 or 1a",
+                r.name,
+                r.options.kind.name()
+            )));
+        }
+        if r.tets.is_empty() {
+            return Err(Error::invalid(format!("region '{}' holds no tets", r.name)));
+        }
+        for &t in &r.tets {
+            let Some(p) = part_of.get_mut(t as usize) else {
+                return Err(Error::invalid(format!(
+                    "region '{}' names tet {t}, past the mesh's {nt}",
+                    r.name
+                )));
+            };
+            if *p != 0 {
+                return Err(Error::invalid(format!(
+                    "tet {t} is in regions '{}' and '{}'",
+                    regions[*p - 1].name,
+                    r.name
+                )));
+            }
+            *p = k + 1;
+        }
+    }
+
+    // Depth per vertex over the whole mesh, so vertices on a region's
+    // border have one.
+    let depth_field = if main.kind.needs_depth() {
+        Some(fields::DepthField::fit(
+            &main.depth_outer,
+            &main.depth_inner,
+        )?)
+    } else {
+        None
+    };
+    // Unclamped: a little past 0 or 1 between the constraints, the masks
+    // and the exemplar's clamp take it as 0 or 1, and the gradient stays
+    // that of the field.
+    let depth: Option<Vec<f64>> = depth_field
+        .as_ref()
+        .map(|f| mesh.positions.par_iter().map(|&p| f.value(p)).collect());
+
+    let splotch = Splotch::new(main.seed);
+    let mut parts = Vec::with_capacity(regions.len() + 1);
+    let main_tets: Vec<u32> = (0..nt as u32)
+        .filter(|&t| part_of[t as usize] == 0)
+        .collect();
+    for (tets, opts) in
+        std::iter::once((&main_tets, main)).chain(regions.iter().map(|r| (&r.tets, &r.options)))
+    {
+        if tets.is_empty() {
+            parts.push(None);
+            continue;
+        }
+        let filled = if tets.len() == nt {
+            fill_part(
+                mesh,
+                opts,
+                depth_field.as_ref(),
+                depth.as_deref(),
+                &splotch,
+                progress,
+            )?
+        } else {
+            let (sub, old) = mesh.subset(tets);
+            let d: Option<Vec<f64>> = depth
+                .as_ref()
+                .map(|d| old.iter().map(|&v| d[v as usize]).collect());
+            fill_part(
+                &sub,
+                opts,
+                depth_field.as_ref(),
+                d.as_deref(),
+                &splotch,
+                progress,
+            )?
+        };
+        parts.push(Some(filled));
+    }
+
+    // One model: each tet's layers from its part, patches numbered on
+    // across the parts.
+    let mut first_patch = Vec::with_capacity(parts.len());
+    let mut patches = 0u32;
+    for p in &parts {
+        first_patch.push(patches);
+        patches += p.as_ref().map_or(0, |(p, _)| p.patches);
+    }
+    let mut local = vec![0u32; nt];
+    for tets in std::iter::once(&main_tets).chain(regions.iter().map(|r| &r.tets)) {
+        for (k, &t) in tets.iter().enumerate() {
+            local[t as usize] = k as u32;
+        }
+    }
+    let mut start = Vec::with_capacity(nt + 1);
+    start.push(0u32);
+    let mut layers = Vec::new();
+    for t in 0..nt {
+        let (pasted, _) = parts[part_of[t]].as_ref().expect("a tet's part was filled");
+        let l = local[t] as usize;
+        let range = pasted.start[l] as usize..pasted.start[l + 1] as usize;
+        layers.extend(pasted.layers[range].iter().map(|&layer| Layer {
+            patch: layer.patch + first_patch[part_of[t]],
+            ..layer
+        }));
+        start.push(layers.len() as u32);
+    }
+    let stats = parts
+        .into_iter()
+        .map(|p| p.map_or_else(FillStats::empty, |(_, s)| s))
+        .collect();
+    Ok((
+        LstModel {
+            kind: main.kind,
+            seed: main.seed,
+            mesh: mesh.clone(),
+            depth: depth.filter(|_| main.kind.layered()),
+            start,
+            layers,
+            patches,
+        },
+        stats,
+    ))
+}
+
+impl FillStats {
+    fn empty() -> FillStats {
+        FillStats {
+            patches: 0,
+            layers: 0,
+            angle_median: 0.0,
+            angle_p95: 0.0,
+            angle_max: 0.0,
+        }
+    }
+}
+
+/// Paste one part: `depth` and its `field` are the organ's (at this
+/// part's vertices), for the types that need them.
+fn fill_part(
+    mesh: &TetMesh,
+    opts: &LstOptions,
+    depth_field: Option<&fields::DepthField>,
+    depth: Option<&[f64]>,
+    splotch: &Splotch,
+    progress: &dyn Progress,
+) -> Result<(paste::Pasted, FillStats)> {
     let kind = opts.kind;
     let scale_ok = opts.scale > 0.0 && opts.scale.is_finite();
     if !kind.layered() && !scale_ok {
@@ -166,27 +350,12 @@ pub fn fill_stats(
             (c[0] + c[1] + c[2] + c[3]) / 4.0
         })
         .collect();
-
-    // Depth per vertex, and its gradient per tet.
-    let depth_field = if kind.needs_depth() {
-        Some(fields::DepthField::fit(
-            &opts.depth_outer,
-            &opts.depth_inner,
-        )?)
-    } else {
-        None
-    };
-    // Unclamped: a little past 0 or 1 between the constraints, the masks
-    // and the exemplar's clamp take it as 0 or 1, and the gradient stays
-    // that of the field.
-    let depth: Option<Vec<f64>> = depth_field
-        .as_ref()
-        .map(|f| mesh.positions.par_iter().map(|&p| f.value(p)).collect());
+    let depth = depth.filter(|_| kind.needs_depth());
     // The depth gradient per tet: that of the depth as the texture gets it,
     // interpolated linearly from the vertices, so the s axis of layered
     // textures follows the s coordinate exactly; the field's own gradient
     // at the centroid where the vertices' depths are all alike.
-    let gradient: Vec<DVec3> = match (&depth_field, &depth) {
+    let gradient: Vec<DVec3> = match (depth_field, depth) {
         (Some(f), Some(d)) => (0..mesh.num_tets())
             .into_par_iter()
             .map(|t| {
@@ -295,12 +464,13 @@ pub fn fill_stats(
             TextureType::LayeredTensor => depth_frame(strokes[t], 1.0 / gradient[t].length()),
         }
     };
-    let splotch = Splotch::new(seed);
+    // Only layered types take the depth as their s coordinate (2-a lays
+    // its s axis along the gradient, at the given scale).
     let f = paste::Fields {
         frame_of: &frame_of,
-        depth: depth.as_deref(),
+        depth: depth.filter(|_| kind.layered()),
     };
-    let mut pasted = paste::paste(mesh, &f, &splotch, seed, progress)?;
+    let mut pasted = paste::paste(mesh, &f, splotch, seed, progress)?;
     pasted.angles.sort_unstable_by(f32::total_cmp);
     let at = |q: f64| {
         let a = &pasted.angles;
@@ -314,18 +484,7 @@ pub fn fill_stats(
         angle_p95: at(0.95),
         angle_max: at(1.0),
     };
-    Ok((
-        LstModel {
-            kind,
-            seed,
-            mesh: mesh.clone(),
-            depth: depth.filter(|_| kind.layered()),
-            start: pasted.start,
-            layers: pasted.layers,
-            patches: pasted.patches,
-        },
-        stats,
-    ))
+    Ok((pasted, stats))
 }
 
 /// The depth constraints of a natural default for organs (issue 22): depth

@@ -10,7 +10,9 @@
 //! - `u8` 1 if depths follow, then `f64` per vertex (layered types);
 //! - `u64` layer count, then per tet its `u32` layer count, then the
 //!   layers: `u32` patch, `u8` mask (`MaskKind`), `12 f32` texture
-//!   coordinates (vertex by vertex, r s t).
+//!   coordinates (vertex by vertex, r s t). A layer with a depth band
+//!   mask (1 to 3) is layered: its s is the depth there. A layered model
+//!   may hold splotch layers too, from regions of type 0 or 1-a.
 
 use std::path::Path;
 
@@ -227,6 +229,13 @@ impl LstModel {
         }
         if r.at != bytes.len() {
             return Err(format!("{} bytes after the last layer", bytes.len() - r.at));
+        }
+        if depth.is_none()
+            && let Some(i) = layers.iter().position(|l| l.mask != MaskKind::Splotch)
+        {
+            return Err(format!(
+                "layer {i} has a depth band mask, but the file has no depths"
+            ));
         }
         let mesh = TetMesh {
             positions,

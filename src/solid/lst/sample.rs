@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 use super::locate::Locator;
-use super::mask::Splotch;
+use super::mask::{MaskKind, Splotch};
 use super::model::LstModel;
 use crate::error::{Error, Result};
 use crate::solid::Interior;
@@ -46,13 +46,15 @@ impl<'a> LstInterior<'a> {
     /// The colour in tet `t` at barycentric coordinates `b`.
     pub fn colour_in(&self, t: usize, b: [f64; 4]) -> [f32; 3] {
         let size = self.exemplar.size.map(|s| s as f64);
-        let layered = self.model.kind.layered();
         let mut out = [0f32; 3];
         let mut clear = 1.0f32;
         let mut first = None;
         for layer in self.model.layers_of(t) {
             let mut w = layer.at(b);
-            if let Some(d) = &self.model.depth {
+            // A depth band's patch is layered (1-b, 2-b); a splotch's, of
+            // a region inside a layered organ, is not.
+            let layered = layer.mask != MaskKind::Splotch;
+            if let (true, Some(d)) = (layered, &self.model.depth) {
                 let tet = self.model.mesh.tets[t];
                 w[1] = (0..4).map(|k| b[k] * d[tet[k] as usize]).sum();
             }

@@ -334,7 +334,7 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
             )
             .unwrap();
         scene
-            .set_lst_cut(&renderer, &gpu.device, Some(&buffers))
+            .set_lst_cut(&renderer, &gpu.device, &gpu.queue, Some(&buffers))
             .unwrap();
         let mut camera = OrbitCamera::fit(lo, hi);
         camera.yaw = 0.0;

@@ -648,7 +648,7 @@ impl Viewer {
         let Some((normal, offset)) = plane else {
             scene.set_cut(&self.gpu.device, None);
             // Setting none cannot fail.
-            let _ = scene.set_lst_cut(&self.renderer, &self.gpu.device, None);
+            let _ = scene.set_lst_cut(&self.renderer, &self.gpu.device, &self.gpu.queue, None);
             return;
         };
         let mut cut = CutMesh {
@@ -678,7 +678,12 @@ impl Viewer {
             }
         }
         scene.set_cut(&self.gpu.device, Some(&cut));
-        if let Err(e) = scene.set_lst_cut(&self.renderer, &self.gpu.device, Some(&lst_cut)) {
+        if let Err(e) = scene.set_lst_cut(
+            &self.renderer,
+            &self.gpu.device,
+            &self.gpu.queue,
+            Some(&lst_cut),
+        ) {
             problem = Some(e.to_string());
         }
         if let Some(p) = problem {

@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::scene::composite::Transform;
 use crate::scene::draw::{DrawList, LayerKind, Material, Stream};
 use crate::solid::Placement;
+use crate::solid::lst::gpu::CutBuffers;
 use crate::synth::volume::Volume;
 
 /// Floats per vertex: position 3, normal 3, uv 2, alpha 1, tangent 4,
@@ -477,7 +478,8 @@ impl GpuScene {
         &mut self,
         renderer: &Renderer,
         device: &wgpu::Device,
-        cut: Option<&crate::solid::lst::gpu::CutBuffers>,
+        queue: &wgpu::Queue,
+        cut: Option<&CutBuffers>,
     ) -> Result<()> {
         self.lst_cut = None;
         let Some(cut) = cut.filter(|c| c.vertex_count() > 0) else {
@@ -486,20 +488,53 @@ impl GpuScene {
         let block = self.block.as_ref().ok_or_else(|| {
             crate::Error::invalid("an LST cut needs the interior block, its exemplar, set first")
         })?;
-        let storage = wgpu::BufferUsages::STORAGE;
-        let tets = buffer(device, "lst tets", bytemuck::cast_slice(&cut.tets), storage);
-        let layers = buffer(
-            device,
+        let limit = device.limits().max_texture_dimension_2d;
+        let table = |label: &str, format: wgpu::TextureFormat, texels: &[u8]| {
+            let texel = format.block_copy_size(None).expect("a plain format") as usize;
+            let [w, h] = CutBuffers::rows(texels.len() / texel);
+            if h > limit {
+                return Err(crate::Error::invalid(format!(
+                    "the LST cut's {label} need {h} rows of texels, over this GPU's 2D texture limit of {limit}"
+                )));
+            }
+            let mut data = texels.to_vec();
+            data.resize(w as usize * h as usize * texel, 0);
+            let texture = device.create_texture_with_data(
+                queue,
+                &wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                },
+                wgpu::util::TextureDataOrder::LayerMajor,
+                &data,
+            );
+            Ok(texture.create_view(&Default::default()))
+        };
+        let tets = table(
+            "lst tets",
+            wgpu::TextureFormat::Rgba32Uint,
+            bytemuck::cast_slice(&cut.tets),
+        )?;
+        let layers = table(
             "lst layers",
+            wgpu::TextureFormat::Rgba32Float,
             bytemuck::cast_slice(&cut.layers),
-            storage,
-        );
-        let waves = buffer(
-            device,
+        )?;
+        let waves = table(
             "lst waves",
+            wgpu::TextureFormat::Rgba32Float,
             bytemuck::cast_slice(&cut.waves),
-            storage,
-        );
+        )?;
         self.lst_cut = Some(GpuLstCut {
             vertices: buffer(
                 device,

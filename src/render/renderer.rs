@@ -164,14 +164,15 @@ pub(crate) fn shader_sources() -> [String; 2] {
     ]
 }
 
-fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+/// A table read with textureLoad (solid/lst/sample.wgsl).
+fn table_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
         },
         count: None,
     }
@@ -216,9 +217,9 @@ impl Renderer {
             entries: &[
                 texture_entry(0, wgpu::TextureViewDimension::D3),
                 sampler_entry(1),
-                storage_entry(2),
-                storage_entry(3),
-                storage_entry(4),
+                table_entry(2, wgpu::TextureSampleType::Uint),
+                table_entry(3, wgpu::TextureSampleType::Float { filterable: false }),
+                table_entry(4, wgpu::TextureSampleType::Float { filterable: false }),
             ],
         });
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
@@ -444,12 +445,12 @@ impl Renderer {
     }
 
     /// The LST cut's bind group: the exemplar (the block's texture, as
-    /// the block sampler wraps it) and the three storage buffers.
+    /// the block sampler wraps it) and the three tables.
     pub(super) fn lst_bind_group(
         &self,
         device: &wgpu::Device,
         exemplar: &wgpu::TextureView,
-        [tets, layers, waves]: [&wgpu::Buffer; 3],
+        [tets, layers, waves]: [&wgpu::TextureView; 3],
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("lst"),
@@ -465,15 +466,15 @@ impl Renderer {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: tets.as_entire_binding(),
+                    resource: wgpu::BindingResource::TextureView(tets),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
-                    resource: layers.as_entire_binding(),
+                    resource: wgpu::BindingResource::TextureView(layers),
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: waves.as_entire_binding(),
+                    resource: wgpu::BindingResource::TextureView(waves),
                 },
             ],
         })

@@ -14,7 +14,7 @@ use crate::tetra::march::Cut;
 /// `sample.wgsl` with the mask's constants (mask.rs) it needs.
 pub fn sample_lst_wgsl() -> String {
     format!(
-        "const LST_RADIUS: f32 = {:?};\nconst LST_WANDER: f32 = {:?};\n\
+        "const LST_ROW: u32 = {ROW}u;\nconst LST_RADIUS: f32 = {:?};\nconst LST_WANDER: f32 = {:?};\n\
          const LST_FALLOFF: f32 = {:?};\nconst LST_BAND_OUTER: f32 = {:?};\n\
          const LST_BAND_MIDDLE_LO: f32 = {:?};\nconst LST_BAND_MIDDLE_HI: f32 = {:?};\n\
          const LST_BAND_INNER: f32 = {:?};\n{}",
@@ -28,6 +28,9 @@ pub fn sample_lst_wgsl() -> String {
         include_str!("sample.wgsl")
     )
 }
+
+/// Texels per row of the tables `sample.wgsl` reads (`CutBuffers::rows`).
+pub const ROW: usize = 1024;
 
 /// 32-bit words per vertex: position 3, normal 3, barycentric 4, depth 1
 /// (f32 bits), tet slot 1 (u32).
@@ -54,6 +57,15 @@ pub struct CutBuffers {
 impl CutBuffers {
     pub fn vertex_count(&self) -> u32 {
         (self.vertices.len() / VERTEX_WORDS) as u32
+    }
+
+    /// A table of `texels` as a 2D texture's width and height, `ROW`
+    /// texels a row (the last padded); at least 1 x 1.
+    pub fn rows(texels: usize) -> [u32; 2] {
+        [
+            texels.clamp(1, ROW) as u32,
+            texels.div_ceil(ROW).max(1) as u32,
+        ]
     }
 
     /// Add `cut` (`tetra::march` through `model`'s mesh), its triangles

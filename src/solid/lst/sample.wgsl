@@ -4,31 +4,32 @@
 // prepended) and call lst_colour(slot, b, depth) with what a cut vertex
 // carries.
 //
-// Host side (wgpu), filled by solid::lst::gpu::CutBuffers:
+// Host side (wgpu), filled by solid::lst::gpu::CutBuffers. The tables are
+// 2D textures LST_ROW texels wide read with textureLoad, not storage
+// buffers, so this runs where fragment shaders have none (GL ES 3.0,
+// WebGL2, the viewer on wgpu's GL backend):
 // - lst_exemplar: the exemplar as a 3D texture, Rgba8Unorm, one mip level,
 //   voxel (x, y, z) at texel (x, y, z), sampled by lst_sampler with
 //   address mode Repeat and Linear filters (as sample_block.wgsl);
-// - lst_tets: per tet the cut passes through (its slot), the first of its
-//   layers, their count and its model's splotch;
-// - lst_layers: the layers, in paste order: the 4 corners' texture
-//   coordinates in xyz, the mask kind in c0.w;
-// - lst_waves: per splotch, 6 waves of 2 vec4 each (direction times
-//   frequency and phase; amplitude).
+// - lst_tets (Rgba32Uint): per tet the cut passes through (its slot), the
+//   first of its layers, their count and its model's splotch;
+// - lst_layers (Rgba32Float): per layer in paste order 4 texels, its
+//   corners' texture coordinates in xyz, the mask kind in the first's w;
+// - lst_waves (Rgba32Float): per splotch, 6 waves of 2 texels each
+//   (direction times frequency and phase; amplitude).
 // All in bind group 2, leaving group 0 to the including shader's camera
 // and group 1 to the block sampler. Colours come out in 0..1.
 
-struct LstLayer {
-    c0: vec4<f32>,
-    c1: vec4<f32>,
-    c2: vec4<f32>,
-    c3: vec4<f32>,
-}
-
 @group(2) @binding(0) var lst_exemplar: texture_3d<f32>;
 @group(2) @binding(1) var lst_sampler: sampler;
-@group(2) @binding(2) var<storage, read> lst_tets: array<vec4<u32>>;
-@group(2) @binding(3) var<storage, read> lst_layers: array<LstLayer>;
-@group(2) @binding(4) var<storage, read> lst_waves: array<vec4<f32>>;
+@group(2) @binding(2) var lst_tets: texture_2d<u32>;
+@group(2) @binding(3) var lst_layers: texture_2d<f32>;
+@group(2) @binding(4) var lst_waves: texture_2d<f32>;
+
+// Where entry i of a table lies.
+fn lst_texel(i: u32) -> vec2<i32> {
+    return vec2<i32>(i32(i % LST_ROW), i32(i / LST_ROW));
+}
 
 // Smooth step from 1 (x <= 0) down to 0 (x >= 1).
 fn lst_fall(x: f32) -> f32 {
@@ -40,8 +41,9 @@ fn lst_fall(x: f32) -> f32 {
 fn lst_radius(splotch: u32, d: vec3<f32>) -> f32 {
     var wander = 0.0;
     for (var k = 0u; k < 6u; k++) {
-        let wave = lst_waves[splotch * 12u + 2u * k];
-        wander += lst_waves[splotch * 12u + 2u * k + 1u].x * cos(dot(wave.xyz, d) + wave.w);
+        let at = splotch * 12u + 2u * k;
+        let wave = textureLoad(lst_waves, lst_texel(at), 0);
+        wander += textureLoad(lst_waves, lst_texel(at + 1u), 0).x * cos(dot(wave.xyz, d) + wave.w);
     }
     return LST_RADIUS * (1.0 + LST_WANDER * wander);
 }
@@ -90,15 +92,19 @@ fn lst_alpha(mask: u32, splotch: u32, w: vec3<f32>) -> f32 {
 // depth (layered models) is `depth`: its layers composited in paste order
 // and divided by their total alpha; the first layer where none reaches.
 fn lst_colour(slot: u32, b: vec4<f32>, depth: f32) -> vec3<f32> {
-    let tet = lst_tets[slot];
+    let tet = textureLoad(lst_tets, lst_texel(slot), 0);
     let size = vec3<f32>(textureDimensions(lst_exemplar));
     var out = vec3<f32>(0.0);
     var clear = 1.0;
     var first = vec3<f32>(0.0);
     for (var k = 0u; k < tet.y; k++) {
-        let l = lst_layers[tet.x + k];
-        var w = b.x * l.c0.xyz + b.y * l.c1.xyz + b.z * l.c2.xyz + b.w * l.c3.xyz;
-        let mask = u32(l.c0.w);
+        let at = 4u * (tet.x + k);
+        let c0 = textureLoad(lst_layers, lst_texel(at), 0);
+        let c1 = textureLoad(lst_layers, lst_texel(at + 1u), 0);
+        let c2 = textureLoad(lst_layers, lst_texel(at + 2u), 0);
+        let c3 = textureLoad(lst_layers, lst_texel(at + 3u), 0);
+        var w = b.x * c0.xyz + b.y * c1.xyz + b.z * c2.xyz + b.w * c3.xyz;
+        let mask = u32(c0.w);
         // A depth band's patch is layered: s is the depth, the exemplar's
         // y clamped rather than wrapped.
         var voxel = w * size;

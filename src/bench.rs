@@ -128,6 +128,26 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "synth3d layered 64",
+            what: "layered (depth-varying) 64^3 block from database/sources/layered_wall.png, seed 002 4.2 with the sweep fix (target <= 10 s)",
+            prepare: |root| {
+                let e = crate::synth::exemplar::Exemplar::load(
+                    &root.join("database/sources/layered_wall.png"),
+                    None,
+                    None,
+                )?
+                .with_height(64)?;
+                Ok(Box::new(move || {
+                    crate::synth::block::layered::synthesize_layered(
+                        &e,
+                        &Default::default(),
+                        &Silent,
+                    )
+                    .map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "lst fill kiwi",
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
             prepare: |_| {

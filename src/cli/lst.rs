@@ -96,7 +96,7 @@ pub fn run(args: Args) -> Result<()> {
         return Err(Error::invalid("organtex lst writes a .lst model").in_file(&args.output));
     }
     let mesh = io::read(&args.mesh)?;
-    let exemplar = Volume::read_nrrd(&args.exemplar)?;
+    let exemplar = Volume::read_exemplar(&args.exemplar)?;
     let strokes = match &args.strokes {
         Some(path) => {
             let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;

@@ -83,7 +83,12 @@ pub fn run(args: Args) -> Result<()> {
     };
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
-    let volume = Volume::read_nrrd(&args.block)?;
+    // An LST exemplar's depth axis, if its header names one, runs along y.
+    let volume = if args.lst.is_some() {
+        Volume::read_exemplar(&args.block)?
+    } else {
+        Volume::read_nrrd(&args.block)?
+    };
     if let Some(scale) = args.scale
         && !(scale.is_finite() && scale > 0.0)
     {

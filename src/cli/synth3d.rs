@@ -41,12 +41,23 @@ pub struct Args {
     size: usize,
     #[arg(long, value_enum, default_value = "fnpts")]
     method: MethodArg,
+    /// A layered (depth-varying) exemplar for LST types 1b and 2b (seed
+    /// 002, 4.2): SOURCE's rows are depth, top = outer. SOURCE is scaled to
+    /// SIZE rows; the block's y is depth (named in the NRRD header), and it
+    /// tiles in x and z, not in y.
+    #[arg(long, conflicts_with_all = ["src_y", "src_z"])]
+    layered: bool,
+    /// With --layered: leave out seed 002's fix for the sweeping artefact
+    /// (to measure it; the block comes out swept along a diagonal).
+    #[arg(long, requires = "layered")]
+    no_sweep_fix: bool,
     /// Seed: the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Iterations per voxel and level (FNPTS's M; optimize: rounds).
-    #[arg(long, default_value_t = 3)]
-    iterations: usize,
+    /// Iterations per voxel and level (FNPTS's M; optimize and --layered:
+    /// rounds) [default: 3; 6 with --layered].
+    #[arg(long)]
+    iterations: Option<usize>,
     /// Pyramid levels (default: as many as keep 16 voxels a side).
     #[arg(long, value_parser = super::synth::levels_in_range)]
     levels: Option<usize>,
@@ -86,6 +97,9 @@ pub fn run(args: Args) -> Result<()> {
             args.spacing
         )));
     }
+    if args.layered {
+        return run_layered(&args);
+    }
     let mut paths = vec![args.source.clone()];
     paths.extend(args.src_y.iter().chain(&args.src_z).cloned());
     let method = match args.method {
@@ -124,7 +138,7 @@ pub fn run(args: Args) -> Result<()> {
     let opts = BlockOptions {
         size: args.size,
         seed: args.seed,
-        iterations: args.iterations,
+        iterations: args.iterations.unwrap_or(3),
         levels: args.levels,
         neighbourhood: args.neighbourhood,
         occurrence: args.occurrence,
@@ -160,6 +174,95 @@ pub fn run(args: Args) -> Result<()> {
             q.coherence, q.completeness, q.seam
         );
     }
+    Ok(())
+}
+
+/// `synth3d --layered`: the layered block, its depth axis in the header.
+fn run_layered(args: &Args) -> Result<()> {
+    use organtex::synth::block::layered::{LayeredOptions, measure_layered, synthesize_layered};
+    let n = args.size;
+    memory::ensure_fits(
+        &format!("synthesising a {n}x{n}x{n} layered block (--size)"),
+        memory::block_bytes(n, 1, Method::Optimize),
+    )?;
+    let exemplar = Exemplar::load(&args.source, args.mask.as_deref(), args.crop)?;
+    // Scaling up by more than 2 would invent the layers' detail.
+    if 2 * exemplar.height < n {
+        return Err(Error::invalid(format!(
+            "has {} rows; a layered block of {n} voxels takes its depth from at least {} of              them (scaling up more invents detail): give a smaller --size or a taller image",
+            exemplar.height,
+            n.div_ceil(2)
+        ))
+        .in_file(&args.source));
+    }
+    let exemplar = exemplar
+        .with_height(n)
+        .map_err(|e| e.in_file(&args.source))?;
+    let opts = LayeredOptions {
+        size: n,
+        seed: args.seed,
+        iterations: args
+            .iterations
+            .unwrap_or(LayeredOptions::default().iterations),
+        levels: args.levels,
+        neighbourhood: args.neighbourhood,
+        sweep_fix: !args.no_sweep_fix,
+    };
+    let bars = Bars::new();
+    let start = std::time::Instant::now();
+    let volume =
+        synthesize_layered(&exemplar, &opts, &bars).map_err(|e| e.in_file(&args.source))?;
+    bars.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let volume = Volume {
+        spacing: args.spacing,
+        ..volume
+    };
+    volume.write_nrrd_with_depth(&args.output, Some(1))?;
+    if let Some(path) = &args.slices {
+        organtex::atomic::write_png(path, &montage(&volume, 4))?;
+    }
+    let q = measure_layered(&volume, &exemplar, 4);
+    println!(
+        "{}: {n}x{n}x{n} layered voxels (depth along y, outer at y = 0) from a {}x{} exemplar in {seconds:.2} s{}",
+        args.output.display(),
+        exemplar.width,
+        exemplar.height,
+        if opts.sweep_fix {
+            ""
+        } else {
+            ", sweep fix off"
+        }
+    );
+    println!(
+        "  mean colour per depth row vs the exemplar's: RMS {:.2}; slices through depth: coherence {:.2}, completeness {:.2}; sweep {:.3}",
+        q.rows_rms, q.coherence, q.completeness, q.sweep
+    );
+    // The yardstick (issue 23): a tileable 2D synthesis of the slice's
+    // size from the same exemplar.
+    let flat = organtex::synth::fnpts::synthesize(
+        &exemplar,
+        &organtex::synth::fnpts::SynthOptions {
+            width: n,
+            height: n,
+            tileable: true,
+            seed: args.seed,
+            ..Default::default()
+        },
+        &organtex::progress::Silent,
+    )?;
+    let q2 = organtex::synth::quality::measure(
+        &exemplar,
+        &organtex::synth::quality::Rgb {
+            width: flat.width,
+            height: flat.height,
+            pixels: &flat.pixels,
+        },
+    );
+    println!(
+        "  a {n}x{n} 2D synthesis from the same exemplar: coherence {:.2}, completeness {:.2}",
+        q2.coherence, q2.completeness
+    );
     Ok(())
 }
 

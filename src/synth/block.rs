@@ -29,6 +29,7 @@
 //! Both wrap around in x, y and z, and the result is rolled so the tile
 //! faces fall where the texture is most continuous.
 
+pub mod layered;
 mod optimize;
 
 use rayon::prelude::*;

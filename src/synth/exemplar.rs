@@ -191,6 +191,35 @@ impl Exemplar {
         })
     }
 
+    /// The exemplar scaled to `height` rows, its width in proportion
+    /// (layered synthesis wants as many rows as the block has depth):
+    /// colours filtered (triangle), validity by nearest pixel.
+    pub fn with_height(&self, height: usize) -> Result<Exemplar> {
+        let width = ((self.width * height) as f64 / self.height as f64)
+            .round()
+            .max(1.0) as usize;
+        if width == self.width && height == self.height {
+            return Ok(self.clone());
+        }
+        let (w, h) = (self.width as u32, self.height as u32);
+        let colour = image::RgbImage::from_fn(w, h, |x, y| {
+            image::Rgb(self.pixels[self.index(x as usize, y as usize)])
+        });
+        let mask = image::GrayImage::from_fn(w, h, |x, y| {
+            image::Luma([255 * self.valid[self.index(x as usize, y as usize)] as u8])
+        });
+        let (nw, nh) = (width as u32, height as u32);
+        let colour =
+            image::imageops::resize(&colour, nw, nh, image::imageops::FilterType::Triangle);
+        let mask = image::imageops::resize(&mask, nw, nh, image::imageops::FilterType::Nearest);
+        Exemplar::new(
+            width,
+            height,
+            colour.pixels().map(|p| p.0).collect(),
+            mask.pixels().map(|p| p.0[0] > 127).collect(),
+        )
+    }
+
     /// The 2 x 2 pixels under coarse pixel (x, y): top left, top right,
     /// bottom left, bottom right.
     pub fn children(&self, x: usize, y: usize) -> [usize; 4] {

@@ -152,8 +152,18 @@ impl Volume {
 
     /// The NRRD file: header, blank line, raw RGB bytes.
     pub fn to_nrrd(&self) -> Vec<u8> {
+        self.to_nrrd_with_depth(None)
+    }
+
+    /// The NRRD file of a layered (depth-varying) exemplar: the header
+    /// names its depth axis (`DEPTH_AXIS_KEY`, x, y or z) for the LST
+    /// reader (`read_exemplar`).
+    pub fn to_nrrd_with_depth(&self, depth_axis: Option<usize>) -> Vec<u8> {
         let [nx, ny, nz] = self.size;
         let s = self.spacing;
+        let depth = depth_axis.map_or(String::new(), |a| {
+            format!("{DEPTH_AXIS_KEY}:={}\n", ["x", "y", "z"][a.min(2)])
+        });
         let header = format!(
             "NRRD0004\n\
              # solid texture written by organtex\n\
@@ -162,7 +172,8 @@ impl Volume {
              sizes: 3 {nx} {ny} {nz}\n\
              spacings: nan {s} {s} {s}\n\
              kinds: RGB-color domain domain domain\n\
-             encoding: raw\n\n"
+             encoding: raw\n\
+             {depth}\n"
         );
         let mut bytes = header.into_bytes();
         bytes.extend(self.voxels.iter().flatten());
@@ -170,14 +181,61 @@ impl Volume {
     }
 
     pub fn write_nrrd(&self, path: &Path) -> Result<()> {
-        let bytes = self.to_nrrd();
+        self.write_nrrd_with_depth(path, None)
+    }
+
+    /// `write_nrrd`, naming the depth axis of a layered exemplar.
+    pub fn write_nrrd_with_depth(&self, path: &Path, depth_axis: Option<usize>) -> Result<()> {
+        let bytes = self.to_nrrd_with_depth(depth_axis);
         atomic::write_file(path, |w| w.write_all(&bytes))
+    }
+
+    /// A solid exemplar for lapped solid textures: the NRRD with its depth
+    /// axis, if its header names one, turned to run along y (where the
+    /// LST sampler reads depth, y = 0 outer).
+    pub fn read_exemplar(path: &Path) -> Result<Volume> {
+        let (volume, depth) = Volume::read_nrrd_with_depth(path)?;
+        Ok(match depth {
+            Some(axis) => volume.depth_along_y(axis),
+            None => volume,
+        })
+    }
+
+    /// The volume with axis `axis` and y swapped (x stays x for a depth
+    /// along z; z stays z for one along x).
+    pub fn depth_along_y(self, axis: usize) -> Volume {
+        if axis == 1 || axis > 2 {
+            return self;
+        }
+        let mut size = self.size;
+        size.swap(axis, 1);
+        let mut voxels = vec![[0u8; 3]; self.voxels.len()];
+        for z in 0..self.size[2] {
+            for y in 0..self.size[1] {
+                for x in 0..self.size[0] {
+                    let mut p = [x, y, z];
+                    p.swap(axis, 1);
+                    voxels[(p[2] * size[1] + p[1]) * size[0] + p[0]] =
+                        self.voxels[self.index(x, y, z)];
+                }
+            }
+        }
+        Volume {
+            size,
+            spacing: self.spacing,
+            voxels,
+        }
     }
 
     /// Read an NRRD file: the header, then the voxel data after it or in
     /// the detached file its `data file` field names (relative to the
     /// header's folder, as 3D Slicer's .nhdr files have it).
     pub fn read_nrrd(path: &Path) -> Result<Volume> {
+        Volume::read_nrrd_with_depth(path).map(|(v, _)| v)
+    }
+
+    /// `read_nrrd`, with the depth axis its header names (`DEPTH_AXIS_KEY`).
+    pub fn read_nrrd_with_depth(path: &Path) -> Result<(Volume, Option<usize>)> {
         if path.is_dir() {
             return Err(Error::format(path, "is a directory, not an NRRD file"));
         }
@@ -205,7 +263,7 @@ impl Volume {
             None if !blank => return Err(bad(NO_BLANK_LINE.into())),
             None => read_data(&header, reader, len.saturating_sub(consumed)).map_err(bad)?,
         };
-        Ok(header.volume(voxels))
+        Ok((header.volume(voxels), header.depth_axis))
     }
 
     /// Parse an NRRD held in memory (its data attached): what `to_nrrd`
@@ -227,6 +285,10 @@ impl Volume {
         Ok(header.volume(voxels))
     }
 }
+
+/// The NRRD key (`key:=value`) naming a layered exemplar's depth axis:
+/// x, y or z, the outer layer at index 0.
+pub const DEPTH_AXIS_KEY: &str = "organtex_depth_axis";
 
 const NO_BLANK_LINE: &str = "the NRRD header does not end in a blank line";
 
@@ -271,6 +333,7 @@ fn read_header(r: &mut impl BufRead) -> std::result::Result<(String, u64, bool),
 /// What an NRRD header says about an RGB uint8 volume and its data.
 struct Header {
     size: [usize; 3],
+    depth_axis: Option<usize>,
     spacing: f64,
     gzip: bool,
     /// The detached data file, relative to the header's folder.
@@ -304,6 +367,7 @@ fn parse_header(header: &str) -> std::result::Result<Header, String> {
     let mut direction_spacing = None;
     let (mut typ, mut encoding, mut dimension) = (None, None, None);
     let mut data_file = None;
+    let mut depth_axis = None;
     let (mut line_skip, mut byte_skip) = (0u64, 0i64);
     for (n, line) in header.lines().enumerate().skip(1) {
         let line = line.trim_end_matches('\r');
@@ -314,8 +378,19 @@ fn parse_header(header: &str) -> std::result::Result<Header, String> {
         let Some((key, value)) = line.split_once(':') else {
             return Err(at(format!("'{line}' is not 'field: value'")));
         };
-        // Key/value pairs (`key:=value`) carry no layout.
-        if value.starts_with('=') {
+        // Key/value pairs (`key:=value`) carry no layout; one names a
+        // layered exemplar's depth axis.
+        if let Some(v) = value.strip_prefix('=') {
+            if key == DEPTH_AXIS_KEY {
+                depth_axis = Some(
+                    ["x", "y", "z"]
+                        .iter()
+                        .position(|a| *a == v.trim())
+                        .ok_or_else(|| {
+                            at(format!("{DEPTH_AXIS_KEY} is '{}': x, y or z", v.trim()))
+                        })?,
+                );
+            }
             continue;
         }
         let value = value.trim();
@@ -408,6 +483,7 @@ fn parse_header(header: &str) -> std::result::Result<Header, String> {
     }
     Ok(Header {
         size,
+        depth_axis,
         spacing: spacing.or(direction_spacing).unwrap_or(1.0),
         gzip,
         data_file,

@@ -148,6 +148,24 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "sweep kiwi 128",
+            what: "sweep designer: a radial section swept to 128^3 with noise, a skin and 100 seed inclusions (target <= 2 s)",
+            prepare: |_| {
+                use crate::synth::sweep;
+                let (section, skin, file) = sweep::kiwi_example();
+                let opts = sweep::SweepOptions {
+                    size: 128,
+                    axis: 2,
+                    noise: 1.5,
+                    seed: 0,
+                };
+                Ok(Box::new(move || {
+                    let incs = sweep::inclusions(&file, 128, std::path::Path::new("."))?;
+                    sweep::sweep(&section, Some((&skin, 4)), &incs, &opts).map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "lst fill kiwi",
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
             prepare: |_| {

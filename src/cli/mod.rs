@@ -8,6 +8,7 @@ mod info;
 mod lst;
 pub mod progress;
 mod section;
+mod sweep;
 mod synth;
 mod synth3d;
 mod tetra;
@@ -52,6 +53,10 @@ enum Command {
     /// Synthesise a solid texture block that tiles in 3D from one exemplar
     /// (isotropic tissue) or three (across x, y, z); writes NRRD.
     Synth3d(synth3d::Args),
+    /// Design a solid exemplar by sweeping a cross-section along an axis
+    /// (seed 002, 4.3): band-limited noise, a thin skin and inclusions
+    /// (seeds) placed from a file; writes NRRD.
+    Sweep(sweep::Args),
     /// Quality figures of a texture against its exemplar: coherence,
     /// completeness (7x7 patches, RMS) and tiling seam.
     SynthQuality(synth::QualityArgs),
@@ -93,6 +98,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::UvMetrics(args)) => uv_metrics::run(args),
         Some(Command::Synth(args)) => synth::run(args),
         Some(Command::Synth3d(args)) => synth3d::run(args),
+        Some(Command::Sweep(args)) => sweep::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
         Some(Command::Tetra(args)) => tetra::run(args),

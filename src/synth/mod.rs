@@ -9,6 +9,7 @@ pub mod fnpts;
 pub mod height;
 pub mod mask;
 pub mod quality;
+pub mod sweep;
 pub mod vessel_tree;
 pub mod vessels;
 pub mod volume;

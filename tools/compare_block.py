@@ -1,9 +1,14 @@
 #!/usr/bin/env python3
-"""Slices of organtex's solid texture blocks against its own 2D synthesis.
+"""Slices of organtex's solid texture blocks against its own 2D synthesis
+and against the photograph itself.
 
-The 3D block synthesis issue asks that slices of a block along x, y and z
-score within 1.5x of the 2D synthesiser's coherence and completeness on the
-same exemplar. For each exemplar crop (the top-left N x N of a database
+Issue 23 restates issue 6's figure: slices of an N-voxel block along x, y
+and z are compared with a tileable N x N 2D synthesis from the same N x N
+exemplar, and with other N x N crops of the same photograph (the material
+itself: what a texture that is right without copying the exemplar scores).
+An axis meets the target when its coherence and completeness are within
+1.5x of 2D's, or no worse than the photograph's other crops ("missed"
+marks one that does neither, or has a seam over 1.15). For each exemplar crop (the top-left N x N of a database
 photograph, as tests/block.rs takes them) this runs the 2D synthesiser
 (`organtex synth --tileable`, N x N, seeds 0-2, median figures, measured by
 `organtex synth-quality`) and each block method (`organtex synth3d --size
@@ -23,14 +28,14 @@ and coherence is a mean over the slice's patches: its floor is
 (upright + min(streak, transposed)) / 2, each measured on a slice made
 from a tileable 2D texture of the exemplar, before any seam between
 regions. A floor over 1.5x of 2D means no such block meets the target.
-It also prints, as "photo", the median figures of other N x N crops of the
-same photograph against the exemplar crop: what the material itself
-scores, a texture that is right without being copied from the exemplar.
+Every size prints, as "photo", the median figures of other N x N crops of
+the same photograph against the exemplar crop.
 
 Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize]
                               [--floor] [--organtex target/release/organtex]
                               [IMAGE ...]
-  default images: the database's gravel and ihc photographs.
+  default images: the database's gravel and ihc photographs, and grass (a
+  photograph the block synthesis was never tuned on).
 Exits 1 if a block fails to synthesise; the ratios are reported, not judged.
 """
 
@@ -145,9 +150,8 @@ def main():
                         help="also print the photograph's other crops' figures and the coherence floor of region-copying blocks (module doc)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
-    if args.floor:
-        pyenv.ensure(["pillow"], __file__)
-    images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png"]
+    pyenv.ensure(["pillow"], __file__)
+    images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png", SOURCES / "grass.png"]
 
     print(f"{'exemplar':<12}{'size':>5}  {'method':<9}{'time s':>8}  {'axis':<5}{'coh':>7}{'comp':>7}"
           f"{'coh/2D':>8}{'comp/2D':>8}{'seam':>6}")
@@ -157,10 +161,10 @@ def main():
             for side in args.sizes:
                 coh2, comp2 = reference(args.organtex, image, side, tmp)
                 print(f"{image.stem:<12}{side:>5}  {'2D':<9}{'':>8}  {'':<5}{coh2:7.2f}{comp2:7.2f}")
+                coh_p, comp_p = photo(args.organtex, image, side, tmp)
+                print(f"{image.stem:<12}{side:>5}  {'photo':<9}{'':>8}  {'':<5}{coh_p:7.2f}{comp_p:7.2f}"
+                      f"{coh_p / coh2:8.2f}{comp_p / comp2:8.2f}", flush=True)
                 if args.floor:
-                    coh, comp = photo(args.organtex, image, side, tmp)
-                    print(f"{image.stem:<12}{side:>5}  {'photo':<9}{'':>8}  {'':<5}{coh:7.2f}{comp:7.2f}"
-                          f"{coh / coh2:8.2f}{comp / comp2:8.2f}", flush=True)
                     coherence, least = floor(args.organtex, image, side, tmp)
                     parts = ", ".join(f"{k} {v:.2f}" for k, v in coherence.items())
                     print(f"{image.stem:<12}{side:>5}  {'floor':<9}{'':>8}  {'x|z':<5}{least:7.2f}{'':>7}"
@@ -168,10 +172,15 @@ def main():
                 for method in args.methods:
                     seconds, axes = block(args.organtex, image, side, method, tmp)
                     for k, (axis, coh, comp, seam) in enumerate(axes):
-                        within = coh <= LIMIT * coh2 and comp <= LIMIT * comp2 and seam <= SEAM_LIMIT
+                        near_2d = coh <= LIMIT * coh2 and comp <= LIMIT * comp2
+                        near_photo = coh <= coh_p and comp <= comp_p
+                        within = (near_2d or near_photo) and seam <= SEAM_LIMIT
+                        verdict = "" if within else "  missed"
+                        if within and not near_2d:
+                            verdict = "  (as close as the photo)"
                         print(f"{image.stem:<12}{side:>5}  {method:<9}{f'{seconds:.2f}' if k == 0 else '':>8}  {axis:<5}"
                               f"{coh:7.2f}{comp:7.2f}{coh / coh2:8.2f}{comp / comp2:8.2f}{seam:6.2f}"
-                              f"{'' if within else '  missed'}", flush=True)
+                              f"{verdict}", flush=True)
 
 
 if __name__ == "__main__":

@@ -166,6 +166,35 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "stereology 128",
+            what: "particles from database/sources/ihc.png: profiles, unfolding, placement, annealing and colour into a 128^3 block (target <= 20 s with the residual, not yet built)",
+            prepare: |root| {
+                let img =
+                    crate::synth::exemplar::read_image(&root.join("database/sources/ihc.png"))?
+                        .to_rgb8();
+                let (w, h) = (img.width() as usize, img.height() as usize);
+                let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+                Ok(Box::new(move || {
+                    let section = crate::solid::stereology::profiles::find(
+                        w,
+                        h,
+                        &pixels,
+                        &vec![true; w * h],
+                        0,
+                    )?;
+                    crate::solid::stereology::synthesize(
+                        &[section],
+                        &crate::solid::stereology::StereologyOptions {
+                            size: 128,
+                            ..Default::default()
+                        },
+                        &Silent,
+                    )
+                    .map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "lst fill kiwi",
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
             prepare: |_| {

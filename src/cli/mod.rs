@@ -8,6 +8,7 @@ mod info;
 mod lst;
 pub mod progress;
 mod section;
+mod stereology;
 mod sweep;
 mod synth;
 mod synth3d;
@@ -57,6 +58,11 @@ enum Command {
     /// (seed 002, 4.3): band-limited noise, a thin skin and inclusions
     /// (seeds) placed from a file; writes NRRD.
     Sweep(sweep::Args),
+    /// A particles-in-a-binder block from photographs of sections (seed
+    /// 001): profiles found, their sizes unfolded into the 3D size
+    /// distribution, particles placed and annealed in a periodic box,
+    /// coloured from the profiles; writes NRRD.
+    Stereology(stereology::Args),
     /// Quality figures of a texture against its exemplar: coherence,
     /// completeness (7x7 patches, RMS) and tiling seam.
     SynthQuality(synth::QualityArgs),
@@ -99,6 +105,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Synth(args)) => synth::run(args),
         Some(Command::Synth3d(args)) => synth3d::run(args),
         Some(Command::Sweep(args)) => sweep::run(args),
+        Some(Command::Stereology(args)) => stereology::run(args),
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
         Some(Command::Tetra(args)) => tetra::run(args),

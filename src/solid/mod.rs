@@ -9,6 +9,7 @@ pub mod cut;
 pub mod interior;
 pub mod lst;
 pub mod section;
+pub mod stereology;
 
 pub use cut::{
     Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,

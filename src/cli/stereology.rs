@@ -1,0 +1,131 @@
+//! `organtex stereology PHOTO... [--mask M] [--bins N] --size N [--seed S]
+//! -o BLOCK.nrrd [--profiles-out P.png] [--json]`.
+
+use std::path::PathBuf;
+
+use organtex::solid::stereology::{self, StereologyOptions, profiles};
+use organtex::synth::exemplar::read_image;
+use organtex::{Error, Result};
+
+use super::progress::Bars;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Photographs of sections of the same material (PNG or JPEG), the
+    /// same pixel scale: particles (the minority colour class) in a
+    /// binder.
+    #[arg(required = true)]
+    photos: Vec<PathBuf>,
+    /// What is not tissue, black (for every photograph): profiles touching
+    /// it are left out and corrected for, like those touching the border.
+    #[arg(long, value_name = "IMAGE")]
+    mask: Option<PathBuf>,
+    /// Particle-size bins reported.
+    #[arg(long, default_value_t = 10)]
+    bins: usize,
+    /// Voxels a side (a voxel is a pixel of the photographs).
+    #[arg(long, value_name = "N")]
+    size: usize,
+    /// Seed: the same seed gives the same bytes.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output block, NRRD (raw uint8 RGB), tiling in x, y and z.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// A picture of what was found in the first photograph: profiles
+    /// measured in their mean colour, profiles cut by the border or the
+    /// mask in red, the binder dimmed.
+    #[arg(long, value_name = "PNG")]
+    profiles_out: Option<PathBuf>,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if !args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("nrrd"))
+    {
+        return Err(Error::invalid("the output must be a .nrrd file").in_file(&args.output));
+    }
+    let opts = StereologyOptions {
+        size: args.size,
+        bins: args.bins,
+        seed: args.seed,
+    };
+    opts.check()?;
+    let mask = args
+        .mask
+        .as_ref()
+        .map(|m| read_image(m).map(|i| i.to_luma8()))
+        .transpose()?;
+    let mut sections = Vec::new();
+    let mut first = None;
+    for (k, path) in args.photos.iter().enumerate() {
+        let img = read_image(path)?.to_rgb8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let valid: Vec<bool> = match &mask {
+            Some(m) if (m.width() as usize, m.height() as usize) != (w, h) => {
+                return Err(Error::invalid(format!(
+                    "the mask is {}x{} but the photograph is {w}x{h}",
+                    m.width(),
+                    m.height()
+                ))
+                .in_file(path));
+            }
+            Some(m) => m.pixels().map(|p| p.0[0] > 127).collect(),
+            None => vec![true; w * h],
+        };
+        let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+        let section =
+            profiles::find(w, h, &pixels, &valid, args.seed).map_err(|e| e.in_file(path))?;
+        if k == 0 {
+            first = Some((pixels, section.clone()));
+        }
+        sections.push(section);
+    }
+    let bars = Bars::new();
+    let (volume, report) =
+        stereology::synthesize(&sections, &opts, &bars).map_err(|e| e.in_file(&args.photos[0]))?;
+    bars.finish();
+    volume.write_nrrd(&args.output)?;
+    if let (Some(path), Some((pixels, s))) = (&args.profiles_out, first) {
+        let picture = image::RgbImage::from_fn(s.width as u32, s.height as u32, |x, y| {
+            let i = y as usize * s.width + x as usize;
+            image::Rgb(match s.labels[i] {
+                0 => pixels[i].map(|c| c / 3),
+                u32::MAX => [220, 30, 30],
+                k => s.profiles[k as usize - 1].colour.map(|c| c as u8),
+            })
+        });
+        organtex::atomic::write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("the report serialises")
+        );
+    } else {
+        println!(
+            "{}: {n}x{n}x{n} voxels, {} particles from {} profiles (volume fraction {:.3}, block {:.3}, overlap {:.2}%), in {:.2} s",
+            args.output.display(),
+            report.particles,
+            report.profiles,
+            report.volume_fraction,
+            report.block_volume_fraction,
+            100.0 * report.overlap_fraction,
+            report.seconds.unfold + report.seconds.place + report.seconds.colour,
+            n = args.size
+        );
+        let d = &report.size_distribution;
+        for (e, v) in d.edges.windows(2).zip(&d.per_volume) {
+            println!(
+                "  diameter {:6.1}-{:6.1} px: {:.3e} per cubic px",
+                e[0], e[1], v
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,248 @@
+//! Particle interiors from stereology (seed 001, Jagnow, Dorsey and
+//! Rushmeier 2004): particles in a binder (fat lobules, glands in stroma,
+//! nuclei), their 3D size distribution unfolded from the profiles seen in
+//! photographs of sections, placed and annealed in a periodic box, and
+//! coloured from the profiles, into a block that tiles in x, y and z.
+//!
+//! - `profiles`: the particle profiles of a section photograph;
+//! - `unfold`: profile sizes to the particle size distribution;
+//! - `place`: particles drawn from it, annealed apart;
+//! - here: the pipeline and the voxels.
+//!
+//! Sizes are in pixels of the photographs, and a voxel is a pixel.
+
+pub mod place;
+pub mod profiles;
+pub mod unfold;
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+pub use profiles::{Profile, Section};
+pub use unfold::Distribution;
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::rng;
+use crate::synth::volume::Volume;
+
+#[derive(Clone, Debug)]
+pub struct StereologyOptions {
+    /// Voxels a side.
+    pub size: usize,
+    /// Particle-size bins reported (and unfolded into, `unfold::FINE`
+    /// classes each).
+    pub bins: usize,
+    pub seed: u64,
+}
+
+impl Default for StereologyOptions {
+    fn default() -> Self {
+        StereologyOptions {
+            size: 64,
+            bins: 10,
+            seed: 0,
+        }
+    }
+}
+
+impl StereologyOptions {
+    /// The size and bins in range.
+    pub fn check(&self) -> Result<()> {
+        let n = self.size;
+        if !(8..=crate::synth::block::MAX_BLOCK).contains(&n) {
+            return Err(Error::invalid(format!(
+                "the block size must be from 8 to {} voxels, not {n}",
+                crate::synth::block::MAX_BLOCK
+            )));
+        }
+        if !(2..=64).contains(&self.bins) {
+            return Err(Error::invalid(format!(
+                "the bins must be from 2 to 64, not {}",
+                self.bins
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Seconds each step took.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Seconds {
+    pub unfold: f64,
+    pub place: f64,
+    pub colour: f64,
+}
+
+/// What the synthesis found and made (`organtex stereology --json`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Report {
+    /// Diameters in pixels of the photographs; particles per cubic pixel.
+    pub size_distribution: Distribution,
+    /// Of the photographs' usable area, the particles' (Delesse: the
+    /// volume fraction), and of the block, the particles' voxels.
+    pub volume_fraction: f64,
+    pub block_volume_fraction: f64,
+    pub profiles: usize,
+    pub particles: usize,
+    pub overlap_fraction: f64,
+    pub seconds: Seconds,
+}
+
+/// The block of the particles the sections show.
+pub fn synthesize(
+    sections: &[Section],
+    opts: &StereologyOptions,
+    progress: &dyn Progress,
+) -> Result<(Volume, Report)> {
+    opts.check()?;
+    let n = opts.size;
+    let profiles: Vec<&Profile> = sections.iter().flat_map(|s| &s.profiles).collect();
+    if profiles.is_empty() {
+        return Err(Error::invalid("no particle profiles to unfold"));
+    }
+    progress.stage("stereology", 3);
+    let start = Instant::now();
+    let area: f64 = sections.iter().map(|s| s.area).sum();
+    let fraction = sections
+        .iter()
+        .map(|s| s.area_fraction * s.area)
+        .sum::<f64>()
+        / area;
+    let sizes: Vec<(f64, f64)> = profiles.iter().map(|p| (p.diameter, p.weight)).collect();
+    let d_max = sizes.iter().map(|s| s.0).fold(0.0, f64::max);
+    let dist = unfold::unfold(&sizes, area, opts.bins, d_max, &unfold::sphere_kernel);
+    if !dist.per_volume.iter().any(|&x| x > 0.0) {
+        return Err(Error::invalid(
+            "the profiles unfold to no particles: every size bin came out empty",
+        ));
+    }
+    let unfold_s = start.elapsed().as_secs_f64();
+    progress.advance(1);
+    crate::progress::check(progress)?;
+
+    let start = Instant::now();
+    let side = n as f64;
+    let mut particles = place::draw(&dist, side, fraction, opts.seed);
+    if particles.is_empty() {
+        return Err(Error::invalid(format!(
+            "a {n}-voxel block holds none of these particles (largest {d_max:.1} pixels across, \
+             volume fraction {fraction:.3}): give a larger --size"
+        )));
+    }
+    let overlap = place::anneal(&mut particles, side, opts.seed);
+    let place_s = start.elapsed().as_secs_f64();
+    progress.advance(1);
+    crate::progress::check(progress)?;
+
+    let start = Instant::now();
+    // Colour (sec. 4.2): each particle a random profile's mean colour, the
+    // binder the mean of the binder pixels.
+    let binder = sections
+        .iter()
+        .map(|s| s.binder_colour.map(|c| c * s.area))
+        .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+        .map(|c| c / area);
+    let colours: Vec<[u8; 3]> = (0..particles.len())
+        .map(|k| {
+            let p = profiles[rng::below(opts.seed, &[k as u64, 7], profiles.len())];
+            p.colour.map(|c| c.round().clamp(0.0, 255.0) as u8)
+        })
+        .collect();
+    let volume = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
+    let inside = volume.1;
+    let colour_s = start.elapsed().as_secs_f64();
+    progress.advance(1);
+    Ok((
+        volume.0,
+        Report {
+            size_distribution: dist,
+            volume_fraction: fraction,
+            block_volume_fraction: inside as f64 / (n * n * n) as f64,
+            profiles: profiles.len(),
+            particles: particles.len(),
+            overlap_fraction: overlap,
+            seconds: Seconds {
+                unfold: unfold_s,
+                place: place_s,
+                colour: colour_s,
+            },
+        },
+    ))
+}
+
+/// The voxels: each inside a particle its colour (the later of two
+/// overlapping ones), the rest the binder's; the box wraps. Also the count
+/// of particle voxels.
+fn render(
+    ps: &[place::Particle],
+    colours: &[[u8; 3]],
+    binder: [u8; 3],
+    n: usize,
+) -> (Volume, usize) {
+    // Per z slab, in parallel: which particle covers each voxel (the
+    // highest index wins, as if painted in order).
+    let side = n as f64;
+    let owner: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map(|z| {
+            let mut slab = vec![u32::MAX; n * n];
+            let zc = z as f64 + 0.5;
+            for (k, p) in ps.iter().enumerate() {
+                let dz = {
+                    let d = zc - p.centre.z;
+                    d - (d / side).round() * side
+                };
+                if dz.abs() >= p.radius {
+                    continue;
+                }
+                let r2 = p.radius * p.radius - dz * dz;
+                let r = r2.sqrt();
+                let (x0, x1) = (
+                    (p.centre.x - r).floor() as i64,
+                    (p.centre.x + r).ceil() as i64,
+                );
+                let (y0, y1) = (
+                    (p.centre.y - r).floor() as i64,
+                    (p.centre.y + r).ceil() as i64,
+                );
+                for y in y0..=y1 {
+                    let dy = y as f64 + 0.5 - p.centre.y;
+                    for x in x0..=x1 {
+                        let dx = x as f64 + 0.5 - p.centre.x;
+                        if dx * dx + dy * dy < r2 {
+                            let (xw, yw) = (
+                                x.rem_euclid(n as i64) as usize,
+                                y.rem_euclid(n as i64) as usize,
+                            );
+                            slab[yw * n + xw] = k as u32;
+                        }
+                    }
+                }
+            }
+            slab
+        })
+        .collect();
+    let mut inside = 0;
+    let voxels = owner
+        .iter()
+        .flatten()
+        .map(|&k| {
+            if k == u32::MAX {
+                binder
+            } else {
+                inside += 1;
+                colours[k as usize]
+            }
+        })
+        .collect();
+    (
+        Volume {
+            size: [n; 3],
+            spacing: 1.0,
+            voxels,
+        },
+        inside,
+    )
+}

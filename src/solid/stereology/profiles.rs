@@ -1,0 +1,283 @@
+//! Particle profiles in a photograph of a section (seed 001, sec. 3-4):
+//! pixels split into two colour classes by k-means, the minority class
+//! taken as particles (the binder is the continuous phase), its
+//! 4-connected components the profiles, with the binder regions each one
+//! encloses (a gland's lumen inside its epithelium) filled in. A profile touching the image's
+//! border or the mask is cut by the frame, so it is left out and the
+//! others weighted for it (Miles-Lantuejoul: a profile of bounding box
+//! w x h is wholly seen only when its box falls inside the frame, a chance
+//! of (W - w)(H - h) / WH).
+
+use crate::error::{Error, Result};
+use crate::rng;
+
+/// Profiles smaller than this many pixels are noise, not particles.
+pub const MIN_AREA: usize = 9;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Profile {
+    /// Pixels.
+    pub area: f64,
+    /// The diameter of the disc of that area, 2 sqrt(A / pi).
+    pub diameter: f64,
+    /// Mean colour, 0-255.
+    pub colour: [f64; 3],
+    /// Border correction (1 for a profile far from the frame).
+    pub weight: f64,
+}
+
+/// What a section shows.
+#[derive(Clone, Debug)]
+pub struct Section {
+    pub width: usize,
+    pub height: usize,
+    /// Profiles wholly inside the frame.
+    pub profiles: Vec<Profile>,
+    /// Profiles left out for touching the border or the mask.
+    pub cut: usize,
+    /// Usable (unmasked) pixels.
+    pub area: f64,
+    /// Particle pixels over usable pixels: the volume fraction (Delesse).
+    pub area_fraction: f64,
+    pub binder_colour: [f64; 3],
+    /// Per pixel: 0 binder or masked, k + 1 profile k, u32::MAX a cut one.
+    pub labels: Vec<u32>,
+}
+
+/// Find the profiles of `pixels` (row by row), `valid` the usable ones.
+pub fn find(
+    width: usize,
+    height: usize,
+    pixels: &[[u8; 3]],
+    valid: &[bool],
+    seed: u64,
+) -> Result<Section> {
+    let usable: Vec<usize> = (0..pixels.len()).filter(|&i| valid[i]).collect();
+    if usable.len() < 16 {
+        return Err(Error::invalid("the section has almost no usable pixels"));
+    }
+    let particle = two_classes(pixels, &usable, seed);
+    if !usable.iter().any(|&i| particle[i]) {
+        return Err(Error::invalid(
+            "no particles found: the section is one colour",
+        ));
+    }
+    // Particle components, then binder components: a binder region that
+    // one particle component encloses (a gland's lumen inside its
+    // epithelium) is part of that particle.
+    let (mut comp, touches) = components(width, height, valid, &|i| particle[i]);
+    let (binder, binder_touches) = components(width, height, valid, &|i| !particle[i]);
+    let mut enclosing = vec![None; binder_touches.len()];
+    let mut shared = vec![false; binder_touches.len()];
+    for (i, &b) in binder.iter().enumerate() {
+        if b == 0 {
+            continue;
+        }
+        let (x, y) = (i % width, i / width);
+        let around = [
+            (x > 0).then(|| i - 1),
+            (x + 1 < width).then(|| i + 1),
+            (y > 0).then(|| i - width),
+            (y + 1 < height).then(|| i + width),
+        ];
+        for j in around.into_iter().flatten() {
+            let c = comp[j];
+            if c == 0 {
+                continue;
+            }
+            match enclosing[b as usize - 1] {
+                None => enclosing[b as usize - 1] = Some(c),
+                Some(e) if e != c => shared[b as usize - 1] = true,
+                _ => {}
+            }
+        }
+    }
+    for (i, &b) in binder.iter().enumerate() {
+        if b != 0
+            && !binder_touches[b as usize - 1]
+            && !shared[b as usize - 1]
+            && let Some(c) = enclosing[b as usize - 1]
+        {
+            comp[i] = c;
+        }
+    }
+    let is_particle: Vec<bool> = comp.iter().map(|&c| c != 0).collect();
+    // Per component: pixels, colour, bounding box.
+    let count = touches.len();
+    let mut area = vec![0usize; count];
+    let mut colour = vec![[0f64; 3]; count];
+    let mut bbox = vec![[usize::MAX, 0, usize::MAX, 0]; count];
+    for i in 0..pixels.len() {
+        let c = comp[i];
+        if c == 0 {
+            continue;
+        }
+        let k = c as usize - 1;
+        area[k] += 1;
+        for (s, &p) in colour[k].iter_mut().zip(&pixels[i]) {
+            *s += p as f64;
+        }
+        let (x, y) = (i % width, i / width);
+        let b = &mut bbox[k];
+        *b = [b[0].min(x), b[1].max(x), b[2].min(y), b[3].max(y)];
+    }
+    let mut profiles = Vec::new();
+    let mut cut = 0;
+    let mut label_of = vec![u32::MAX; count];
+    for k in 0..count {
+        if touches[k] {
+            cut += 1;
+            continue;
+        }
+        if area[k] < MIN_AREA {
+            continue;
+        }
+        let a = area[k] as f64;
+        let (bw, bh) = (
+            (bbox[k][1] - bbox[k][0] + 1) as f64,
+            (bbox[k][3] - bbox[k][2] + 1) as f64,
+        );
+        let (w, h) = (width as f64, height as f64);
+        let seen = ((w - bw) * (h - bh) / (w * h)).max(1e-3);
+        profiles.push(Profile {
+            area: a,
+            diameter: 2.0 * (a / std::f64::consts::PI).sqrt(),
+            colour: colour[k].map(|c| c / a),
+            weight: 1.0 / seen,
+        });
+        label_of[k] = profiles.len() as u32;
+    }
+    let labels: Vec<u32> = comp
+        .iter()
+        .map(|&c| if c == 0 { 0 } else { label_of[c as usize - 1] })
+        .collect();
+    let n_particle = usable.iter().filter(|&&i| is_particle[i]).count();
+    if profiles.is_empty() {
+        return Err(Error::invalid(if cut > 0 {
+            format!(
+                "every one of the {cut} particle profiles found touches the border or the mask: none can be measured"
+            )
+        } else {
+            "no particles found: no profile of 9 pixels or more".to_string()
+        }));
+    }
+    let mut binder = [0f64; 3];
+    let mut n_binder = 0usize;
+    for &i in &usable {
+        if !is_particle[i] {
+            for (b, &p) in binder.iter_mut().zip(&pixels[i]) {
+                *b += p as f64;
+            }
+            n_binder += 1;
+        }
+    }
+    Ok(Section {
+        width,
+        height,
+        profiles,
+        cut,
+        area: usable.len() as f64,
+        area_fraction: n_particle as f64 / usable.len() as f64,
+        binder_colour: binder.map(|b| b / n_binder.max(1) as f64),
+        labels,
+    })
+}
+
+/// 4-connected components of the usable pixels where `inside` holds:
+/// per pixel its component (1-based, 0 outside), and per component whether
+/// it touches the image's border or an unusable pixel.
+fn components(
+    width: usize,
+    height: usize,
+    valid: &[bool],
+    inside: &dyn Fn(usize) -> bool,
+) -> (Vec<u32>, Vec<bool>) {
+    let mut label = vec![0u32; valid.len()];
+    let mut touches = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..valid.len() {
+        if !valid[start] || !inside(start) || label[start] != 0 {
+            continue;
+        }
+        let id = touches.len() as u32 + 1;
+        let mut touch = false;
+        label[start] = id;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            let (x, y) = (i % width, i / width);
+            if x == 0 || y == 0 || x + 1 == width || y + 1 == height {
+                touch = true;
+            }
+            let around = [
+                (x > 0).then(|| i - 1),
+                (x + 1 < width).then(|| i + 1),
+                (y > 0).then(|| i - width),
+                (y + 1 < height).then(|| i + width),
+            ];
+            for j in around.into_iter().flatten() {
+                if !valid[j] {
+                    touch = true;
+                } else if inside(j) && label[j] == 0 {
+                    label[j] = id;
+                    stack.push(j);
+                }
+            }
+        }
+        touches.push(touch);
+    }
+    (label, touches)
+}
+
+/// k-means with two centres on the usable pixels' colours; true for the
+/// pixels of the smaller class.
+fn two_classes(pixels: &[[u8; 3]], usable: &[usize], seed: u64) -> Vec<bool> {
+    let col = |i: usize| pixels[i].map(|c| c as f64);
+    let dist = |a: [f64; 3], b: [f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    // Start from the darkest and the lightest of a sample (deterministic).
+    let lum = |c: [f64; 3]| c[0] + c[1] + c[2];
+    let sample: Vec<usize> = (0..usable.len().min(4096))
+        .map(|k| usable[rng::below(seed, &[k as u64], usable.len())])
+        .collect();
+    let mut centres = [
+        col(*sample
+            .iter()
+            .min_by(|&&a, &&b| lum(col(a)).total_cmp(&lum(col(b))))
+            .expect("a sample")),
+        col(*sample
+            .iter()
+            .max_by(|&&a, &&b| lum(col(a)).total_cmp(&lum(col(b))))
+            .expect("a sample")),
+    ];
+    let mut class = vec![false; pixels.len()];
+    for _ in 0..20 {
+        let mut sum = [[0f64; 3]; 2];
+        let mut count = [0usize; 2];
+        for &i in usable {
+            let c = col(i);
+            let k = (dist(c, centres[1]) < dist(c, centres[0])) as usize;
+            class[i] = k == 1;
+            count[k] += 1;
+            for a in 0..3 {
+                sum[k][a] += c[a];
+            }
+        }
+        let next = [0, 1].map(|k| {
+            if count[k] == 0 {
+                centres[k]
+            } else {
+                sum[k].map(|s| s / count[k] as f64)
+            }
+        });
+        if next == centres {
+            break;
+        }
+        centres = next;
+    }
+    let ones = usable.iter().filter(|&&i| class[i]).count();
+    let minority_is_one = 2 * ones <= usable.len();
+    let mut out = vec![false; pixels.len()];
+    for &i in usable {
+        out[i] = class[i] == minority_is_one;
+    }
+    out
+}

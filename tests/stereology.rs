@@ -1,0 +1,195 @@
+//! Particle interiors from stereology (issue 26, seed 001): sections cut
+//! through a known sphere aggregate are measured, unfolded and rebuilt;
+//! the volume fraction and size distribution come back, the block's
+//! particles are as round along x, y and z, annealing leaves little
+//! overlap, the same seed gives the same bytes, and bad input is refused.
+
+use glam::DVec3;
+use organtex::progress::Silent;
+use organtex::solid::stereology::{
+    self, StereologyOptions, place,
+    profiles::{self, Section},
+    unfold::{Distribution, total_variation},
+};
+use organtex::synth::volume::Volume;
+
+const BINDER: [u8; 3] = [225, 190, 200];
+const PARTICLE: [u8; 3] = [110, 40, 120];
+
+/// The section z = `at` through particles in a periodic box of `side`.
+fn cut(ps: &[place::Particle], side: usize, at: f64) -> Section {
+    let mut pixels = vec![BINDER; side * side];
+    for p in ps {
+        let dz = {
+            let d = at - p.centre.z;
+            d - (d / side as f64).round() * side as f64
+        };
+        if dz.abs() >= p.radius {
+            continue;
+        }
+        let r = (p.radius * p.radius - dz * dz).sqrt();
+        for y in (p.centre.y - r).floor() as i64..=(p.centre.y + r).ceil() as i64 {
+            for x in (p.centre.x - r).floor() as i64..=(p.centre.x + r).ceil() as i64 {
+                let d = DVec3::new(x as f64 + 0.5, y as f64 + 0.5, 0.0)
+                    - DVec3::new(p.centre.x, p.centre.y, 0.0);
+                if d.length() < r && x >= 0 && y >= 0 && (x as usize) < side && (y as usize) < side
+                {
+                    pixels[y as usize * side + x as usize] = PARTICLE;
+                }
+            }
+        }
+    }
+    profiles::find(side, side, &pixels, &vec![true; side * side], 0).expect("profiles")
+}
+
+fn truth() -> Distribution {
+    // A bimodal aggregate, diameters in pixels.
+    Distribution {
+        edges: (0..=10).map(|i| i as f64 * 2.4).collect(),
+        per_volume: vec![0.0, 0.0, 2.0, 5.0, 3.0, 0.5, 0.2, 1.0, 1.5, 0.5],
+    }
+}
+
+#[test]
+fn sections_of_a_known_aggregate_unfold_and_rebuild_it() {
+    let side = 256;
+    let mut ps = place::draw(&truth(), side as f64, 0.2, 1);
+    place::anneal(&mut ps, side as f64, 1);
+    let true_fraction = ps
+        .iter()
+        .map(|p| 4.0 / 3.0 * std::f64::consts::PI * p.radius.powi(3))
+        .sum::<f64>()
+        / (side as f64).powi(3);
+    let sections: Vec<Section> = (0..8)
+        .map(|k| cut(&ps, side, 10.5 + 32.0 * k as f64))
+        .collect();
+    let count: usize = sections.iter().map(|s| s.profiles.len()).sum();
+    let opts = StereologyOptions {
+        size: 128,
+        bins: 10,
+        seed: 3,
+    };
+    let (block, report) = stereology::synthesize(&sections, &opts, &Silent).expect("block");
+    // The true shares on the report's edges.
+    let edges = &report.size_distribution.edges;
+    let mut t = vec![0.0; edges.len() - 1];
+    for p in &ps {
+        let d = 2.0 * p.radius;
+        let i = edges
+            .windows(2)
+            .position(|e| d <= e[1])
+            .unwrap_or(t.len() - 1);
+        t[i] += 1.0;
+    }
+    let total: f64 = t.iter().sum();
+    let t: Vec<f64> = t.iter().map(|x| x / total).collect();
+    let tv = total_variation(&report.size_distribution.shares(), &t);
+    eprintln!(
+        "{count} profiles: volume fraction {:.3} (true {true_fraction:.3}), block {:.3}; TV {tv:.3}; {} particles, overlap {:.2}%",
+        report.volume_fraction,
+        report.block_volume_fraction,
+        report.particles,
+        100.0 * report.overlap_fraction
+    );
+    assert!(count > 300, "{count} profiles");
+    assert!(
+        (report.volume_fraction / true_fraction - 1.0).abs() < 0.1,
+        "{} vs {true_fraction}",
+        report.volume_fraction
+    );
+    assert!(
+        (report.block_volume_fraction / true_fraction - 1.0).abs() < 0.1,
+        "{} vs {true_fraction}",
+        report.block_volume_fraction
+    );
+    assert!(tv < 0.15, "TV {tv}");
+    assert!(
+        report.overlap_fraction < 0.01,
+        "{}",
+        report.overlap_fraction
+    );
+
+    // As round along x, y and z: the mean profile area of slices across
+    // each axis within 10% of each other.
+    let means: Vec<f64> = (0..3)
+        .map(|axis| {
+            let mut areas = Vec::new();
+            for k in 0..24 {
+                let (w, h, pixels) = block.slice(axis, 2 + 4 * k);
+                let s = profiles::find(w, h, &pixels, &vec![true; w * h], 0).expect("slice");
+                areas.extend(s.profiles.iter().map(|p| p.area));
+            }
+            areas.iter().sum::<f64>() / areas.len() as f64
+        })
+        .collect();
+    let (lo, hi) = (
+        means.iter().cloned().fold(f64::MAX, f64::min),
+        means.iter().cloned().fold(0.0, f64::max),
+    );
+    assert!(hi / lo < 1.1, "mean profile areas by axis {means:?}");
+
+    // Same bytes on any thread count.
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| {
+                stereology::synthesize(&sections, &opts, &Silent)
+                    .expect("block")
+                    .0
+            })
+    };
+    assert_eq!(on(1), on(3));
+    assert_eq!(on(1), block);
+}
+
+#[test]
+fn bad_stereology_input_gives_clear_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let exe = env!("CARGO_BIN_EXE_organtex");
+    let out = dir.path().join("b.nrrd");
+    let run = |photo: &std::path::Path, size: &str| {
+        let o = std::process::Command::new(exe)
+            .arg("stereology")
+            .arg(photo)
+            .args(["--size", size, "-o"])
+            .arg(&out)
+            .output()
+            .expect("run");
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let flat = dir.path().join("flat.png");
+    image::RgbImage::from_pixel(64, 64, image::Rgb([200, 100, 100]))
+        .save(&flat)
+        .expect("png");
+    let (ok, err) = run(&flat, "32");
+    assert!(
+        !ok && err.contains("flat.png") && err.contains("no particles"),
+        "{err}"
+    );
+    // One dark disc cut by the border: every profile touches it.
+    let edge = dir.path().join("edge.png");
+    image::RgbImage::from_fn(64, 64, |x, y| {
+        let d = ((x as f64).powi(2) + (y as f64 - 32.0).powi(2)).sqrt();
+        image::Rgb(if d < 20.0 {
+            [40, 20, 60]
+        } else {
+            [220, 200, 210]
+        })
+    })
+    .save(&edge)
+    .expect("png");
+    let (ok, err) = run(&edge, "32");
+    assert!(
+        !ok && err.contains("edge.png") && err.contains("touches the border"),
+        "{err}"
+    );
+    let (ok, err) = run(&flat, "0");
+    assert!(!ok && err.contains("size"), "{err}");
+    assert!(!out.exists(), "nothing written");
+    let _ = Volume::read_nrrd(&out).expect_err("no block");
+}

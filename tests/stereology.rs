@@ -114,8 +114,8 @@ fn sections_of_a_known_aggregate_unfold_and_rebuild_it() {
     let means: Vec<f64> = (0..3)
         .map(|axis| {
             let mut areas = Vec::new();
-            for k in 0..24 {
-                let (w, h, pixels) = block.slice(axis, 2 + 4 * k);
+            for k in 0..64 {
+                let (w, h, pixels) = block.slice(axis, 2 * k);
                 let s = profiles::find(w, h, &pixels, &vec![true; w * h], 0).expect("slice");
                 areas.extend(s.profiles.iter().map(|p| p.area));
             }

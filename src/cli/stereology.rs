@@ -102,6 +102,20 @@ pub fn run(args: Args) -> Result<()> {
         });
         organtex::atomic::write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
     }
+    if report.overlap_fraction > 0.01 {
+        eprintln!(
+            "warning: annealing left {:.1}% of the particles' volume overlapping: they are dense, \
+             or large for a {}-voxel block (the largest is {:.0} pixels across); a larger --size helps",
+            100.0 * report.overlap_fraction,
+            args.size,
+            report
+                .size_distribution
+                .edges
+                .last()
+                .copied()
+                .unwrap_or(0.0)
+        );
+    }
     if args.json {
         println!(
             "{}",
@@ -116,7 +130,10 @@ pub fn run(args: Args) -> Result<()> {
             report.volume_fraction,
             report.block_volume_fraction,
             100.0 * report.overlap_fraction,
-            report.seconds.unfold + report.seconds.place + report.seconds.colour,
+            report.seconds.unfold
+                + report.seconds.place
+                + report.seconds.colour
+                + report.seconds.residual,
             n = args.size
         );
         let d = &report.size_distribution;

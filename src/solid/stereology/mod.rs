@@ -7,12 +7,14 @@
 //! - `profiles`: the particle profiles of a section photograph;
 //! - `unfold`: profile sizes to the particle size distribution;
 //! - `place`: particles drawn from it, annealed apart;
+//! - `residual`: the photographs' fine detail, resynthesised in 3D;
 //! - here: the pipeline and the voxels.
 //!
 //! Sizes are in pixels of the photographs, and a voxel is a pixel.
 
 pub mod place;
 pub mod profiles;
+pub mod residual;
 pub mod unfold;
 
 use std::time::Instant;
@@ -73,6 +75,7 @@ pub struct Seconds {
     pub unfold: f64,
     pub place: f64,
     pub colour: f64,
+    pub residual: f64,
 }
 
 /// What the synthesis found and made (`organtex stereology --json`).
@@ -102,7 +105,7 @@ pub fn synthesize(
     if profiles.is_empty() {
         return Err(Error::invalid("no particle profiles to unfold"));
     }
-    progress.stage("stereology", 3);
+    progress.stage("stereology", 4);
     let start = Instant::now();
     let area: f64 = sections.iter().map(|s| s.area).sum();
     let fraction = sections
@@ -150,12 +153,33 @@ pub fn synthesize(
             p.colour.map(|c| c.round().clamp(0.0, 255.0) as u8)
         })
         .collect();
-    let volume = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
-    let inside = volume.1;
+    let (mut volume, inside) = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
     let colour_s = start.elapsed().as_secs_f64();
     progress.advance(1);
+    crate::progress::check(progress)?;
+
+    // Fine detail (sec. 4.3): the largest photograph's residual, in 3D,
+    // added to the mean colours.
+    let start = Instant::now();
+    let largest = sections
+        .iter()
+        .max_by(|a, b| a.area.total_cmp(&b.area))
+        .expect("a section");
+    let detail = residual::synthesize(&largest.residual, n, opts.seed);
+    let gain = largest.residual.gain;
+    volume
+        .voxels
+        .par_iter_mut()
+        .zip(&detail)
+        .for_each(|(c, &l)| {
+            for k in 0..3 {
+                c[k] = (c[k] as f64 + gain[k] * l as f64).round().clamp(0.0, 255.0) as u8;
+            }
+        });
+    let residual_s = start.elapsed().as_secs_f64();
+    progress.advance(1);
     Ok((
-        volume.0,
+        volume,
         Report {
             size_distribution: dist,
             volume_fraction: fraction,
@@ -167,6 +191,7 @@ pub fn synthesize(
                 unfold: unfold_s,
                 place: place_s,
                 colour: colour_s,
+                residual: residual_s,
             },
         },
     ))

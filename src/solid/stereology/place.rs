@@ -157,10 +157,34 @@ pub fn overlap_fraction(ps: &[Particle], side: f64) -> f64 {
     if total > 0.0 { overlap / total } else { 0.0 }
 }
 
-/// Anneal until the overlap is under `TARGET` (or `MAX_ROUNDS`); the
-/// overlap fraction left.
+/// Anneal until the overlap is under `TARGET`; the overlap fraction
+/// left. Dense packings jam when every particle pushes at full size from
+/// the start, so the radii grow to full size in `GROWTH` stages, each
+/// relaxed before the next (as Lubachevsky-Stillinger packings grow
+/// them), then the full size relaxes for up to `MAX_ROUNDS`.
 pub fn anneal(ps: &mut [Particle], side: f64, seed: u64) -> f64 {
-    for round in 0..MAX_ROUNDS {
+    let full: Vec<f64> = ps.iter().map(|p| p.radius).collect();
+    for stage in 0..GROWTH {
+        let scale = 0.7 + 0.3 * stage as f64 / GROWTH as f64;
+        for (p, &r) in ps.iter_mut().zip(&full) {
+            p.radius = r * scale;
+        }
+        relax(ps, side, seed, stage as u64 + 1, STAGE_ROUNDS);
+    }
+    for (p, &r) in ps.iter_mut().zip(&full) {
+        p.radius = r;
+    }
+    relax(ps, side, seed, 0, MAX_ROUNDS)
+}
+
+/// Radius growth stages, and the relaxation rounds each takes at most.
+const GROWTH: usize = 6;
+const STAGE_ROUNDS: usize = 60;
+
+/// Push overlapping pairs apart for up to `rounds` rounds or until the
+/// overlap is under `TARGET`; the overlap fraction left.
+fn relax(ps: &mut [Particle], side: f64, seed: u64, stage: u64, rounds: usize) -> f64 {
+    for round in 0..rounds {
         let near = neighbours(ps, side);
         let moves: Vec<DVec3> = (0..ps.len())
             .into_par_iter()
@@ -175,7 +199,7 @@ pub fn anneal(ps: &mut [Particle], side: f64, seed: u64) -> f64 {
                         // Coincident centres: a seeded direction.
                         let dir = d.try_normalize().unwrap_or_else(|| {
                             let u = |c: u64| {
-                                rng::unit(seed, &[round as u64, i as u64, j as u64, c]) - 0.5
+                                rng::unit(seed, &[stage, round as u64, i as u64, j as u64, c]) - 0.5
                             };
                             DVec3::new(u(0), u(1), u(2)).normalize_or(DVec3::X)
                         });

@@ -42,6 +42,9 @@ pub struct Section {
     pub binder_colour: [f64; 3],
     /// Per pixel: 0 binder or masked, k + 1 profile k, u32::MAX a cut one.
     pub labels: Vec<u32>,
+    /// The photograph less its profiles' and binder's mean colours (seed
+    /// 001, 4.3), for the fine detail.
+    pub residual: super::residual::Residual2d,
 }
 
 /// Find the profiles of `pixels` (row by row), `valid` the usable ones.
@@ -171,14 +174,26 @@ pub fn find(
             n_binder += 1;
         }
     }
+    let binder_colour = binder.map(|b| b / n_binder.max(1) as f64);
+    let means: Vec<Option<[f64; 3]>> = (0..pixels.len())
+        .map(|i| match labels[i] {
+            _ if !valid[i] => None,
+            0 => Some(binder_colour),
+            u32::MAX => None,
+            k => Some(profiles[k as usize - 1].colour),
+        })
+        .collect();
+    let residual =
+        super::residual::Residual2d::new(width, height, &super::residual::residual(pixels, &means));
     Ok(Section {
         width,
         height,
+        residual,
         profiles,
         cut,
         area: usable.len() as f64,
         area_fraction: n_particle as f64 / usable.len() as f64,
-        binder_colour: binder.map(|b| b / n_binder.max(1) as f64),
+        binder_colour,
         labels,
     })
 }

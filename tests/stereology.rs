@@ -53,7 +53,8 @@ fn truth() -> Distribution {
 #[test]
 fn sections_of_a_known_aggregate_unfold_and_rebuild_it() {
     let side = 256;
-    let mut ps = place::draw(&truth(), side as f64, 0.2, 1);
+    let stats = stereology::shape::Shape::Sphere.stats(0);
+    let mut ps = place::draw(&truth(), side as f64, 0.2, &stats, 1);
     place::anneal(&mut ps, side as f64, 1);
     let true_fraction = ps
         .iter()
@@ -68,6 +69,7 @@ fn sections_of_a_known_aggregate_unfold_and_rebuild_it() {
         size: 128,
         bins: 10,
         seed: 3,
+        ..Default::default()
     };
     let (block, report) = stereology::synthesize(&sections, &opts, &Silent).expect("block");
     // The true shares on the report's edges.

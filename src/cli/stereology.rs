@@ -23,6 +23,10 @@ pub struct Args {
     /// Particle-size bins reported.
     #[arg(long, default_value_t = 10)]
     bins: usize,
+    /// The particles' shape: sphere, or ellipsoid:A,B,C (semi-axes, any
+    /// scale), its unfolding kernel by Monte Carlo slicing.
+    #[arg(long, default_value = "sphere", value_parser = stereology::shape::Shape::parse)]
+    shape: stereology::shape::Shape,
     /// Voxels a side (a voxel is a pixel of the photographs).
     #[arg(long, value_name = "N")]
     size: usize,
@@ -54,6 +58,7 @@ pub fn run(args: Args) -> Result<()> {
         size: args.size,
         bins: args.bins,
         seed: args.seed,
+        shape: args.shape,
     };
     opts.check()?;
     let mask = args

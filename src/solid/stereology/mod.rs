@@ -15,6 +15,7 @@
 pub mod place;
 pub mod profiles;
 pub mod residual;
+pub mod shape;
 pub mod unfold;
 
 use std::time::Instant;
@@ -37,6 +38,9 @@ pub struct StereologyOptions {
     /// classes each).
     pub bins: usize,
     pub seed: u64,
+    /// The particles' shape (sizes: the diameter of the disc as large as
+    /// the largest central section).
+    pub shape: shape::Shape,
 }
 
 impl Default for StereologyOptions {
@@ -45,6 +49,7 @@ impl Default for StereologyOptions {
             size: 64,
             bins: 10,
             seed: 0,
+            shape: shape::Shape::Sphere,
         }
     }
 }
@@ -83,6 +88,9 @@ pub struct Seconds {
 pub struct Report {
     /// Diameters in pixels of the photographs; particles per cubic pixel.
     pub size_distribution: Distribution,
+    /// Seed 001's own solve (eq. 4, negatives clamped) on the same
+    /// profiles and bins, for comparison.
+    pub seed001: Distribution,
     /// Of the photographs' usable area, the particles' (Delesse: the
     /// volume fraction), and of the block, the particles' voxels.
     pub volume_fraction: f64,
@@ -115,7 +123,13 @@ pub fn synthesize(
         / area;
     let sizes: Vec<(f64, f64)> = profiles.iter().map(|p| (p.diameter, p.weight)).collect();
     let d_max = sizes.iter().map(|s| s.0).fold(0.0, f64::max);
-    let dist = unfold::unfold(&sizes, area, opts.bins, d_max, &unfold::sphere_kernel);
+    let stats = opts.shape.stats(opts.seed);
+    let kernel = |s: &[f64], e: &[f64]| match opts.shape {
+        shape::Shape::Sphere => unfold::sphere_kernel(s, e),
+        shape::Shape::Ellipsoid(_) => stats.kernel(s, e),
+    };
+    let dist = unfold::unfold(&sizes, area, opts.bins, d_max, &kernel);
+    let seed001 = unfold::saltikov(&unfold::profile_density(&sizes, &dist.edges, area), d_max);
     if !dist.per_volume.iter().any(|&x| x > 0.0) {
         return Err(Error::invalid(
             "the profiles unfold to no particles: every size bin came out empty",
@@ -127,7 +141,7 @@ pub fn synthesize(
 
     let start = Instant::now();
     let side = n as f64;
-    let mut particles = place::draw(&dist, side, fraction, opts.seed);
+    let mut particles = place::draw(&dist, side, fraction, &stats, opts.seed);
     if particles.is_empty() {
         return Err(Error::invalid(format!(
             "a {n}-voxel block holds none of these particles (largest {d_max:.1} pixels across, \
@@ -182,6 +196,7 @@ pub fn synthesize(
         volume,
         Report {
             size_distribution: dist,
+            seed001,
             volume_fraction: fraction,
             block_volume_fraction: inside as f64 / (n * n * n) as f64,
             profiles: profiles.len(),
@@ -219,10 +234,11 @@ fn render(
                     let d = zc - p.centre.z;
                     d - (d / side).round() * side
                 };
-                if dz.abs() >= p.radius {
+                let reach = p.reach();
+                if dz.abs() >= reach {
                     continue;
                 }
-                let r2 = p.radius * p.radius - dz * dz;
+                let r2 = reach * reach - dz * dz;
                 let r = r2.sqrt();
                 let (x0, x1) = (
                     (p.centre.x - r).floor() as i64,
@@ -236,7 +252,7 @@ fn render(
                     let dy = y as f64 + 0.5 - p.centre.y;
                     for x in x0..=x1 {
                         let dx = x as f64 + 0.5 - p.centre.x;
-                        if dx * dx + dy * dy < r2 {
+                        if p.contains(glam::DVec3::new(dx, dy, dz)) {
                             let (xw, yw) = (
                                 x.rem_euclid(n as i64) as usize,
                                 y.rem_euclid(n as i64) as usize,

@@ -21,15 +21,44 @@ const MAX_ROUNDS: usize = 400;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Particle {
     pub centre: DVec3,
+    /// Of the sphere of the particle's volume (what annealing separates).
     pub radius: f64,
+    /// A non-spherical particle: world offsets to its unit-ball
+    /// coordinates, and its largest semi-axis.
+    pub ellipsoid: Option<(glam::DMat3, f64)>,
 }
 
-/// Particles of `dist`'s sizes (diameters) in a periodic box of side
-/// `side`, scaled so their volume is `fraction` of the box; each bin's
-/// diameters uniform within it.
-pub fn draw(dist: &Distribution, side: f64, fraction: f64, seed: u64) -> Vec<Particle> {
+impl Particle {
+    /// How far from its centre it reaches.
+    pub fn reach(&self) -> f64 {
+        self.ellipsoid.map_or(self.radius, |(_, a)| a)
+    }
+
+    /// Whether the offset `d` from its centre is inside.
+    pub fn contains(&self, d: DVec3) -> bool {
+        match &self.ellipsoid {
+            None => d.length_squared() < self.radius * self.radius,
+            Some((to_unit, _)) => (*to_unit * d).length_squared() < 1.0,
+        }
+    }
+}
+
+/// Particles of `dist`'s sizes in a periodic box of side `side`, of the
+/// shape `stats` describes, scaled so their volume is `fraction` of the
+/// box; each bin's sizes uniform within it, each non-spherical particle
+/// turned at random (Shoemake's uniform rotation).
+pub fn draw(
+    dist: &Distribution,
+    side: f64,
+    fraction: f64,
+    stats: &super::shape::ShapeStats,
+    seed: u64,
+) -> Vec<Particle> {
     let box_volume = side.powi(3);
-    let natural = dist.sphere_volume_fraction();
+    let natural = dist.volume_fraction(stats.volume);
+    let sphere = stats.axes.iter().all(|&a| (a - 0.5).abs() < 1e-12);
+    // The radius of the sphere of the same volume, per unit size.
+    let equal = (stats.volume * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
     let scale = if natural > 0.0 {
         fraction / natural
     } else {
@@ -44,9 +73,26 @@ pub fn draw(dist: &Distribution, side: f64, fraction: f64, seed: u64) -> Vec<Par
         for k in 0..count {
             let u = |c: u64| rng::unit(seed, &[b as u64, k as u64, c]);
             let d = e[0] + (e[1] - e[0]) * u(0);
+            let ellipsoid = (!sphere).then(|| {
+                let (u1, u2, u3) = (
+                    u(4),
+                    u(5) * std::f64::consts::TAU,
+                    u(6) * std::f64::consts::TAU,
+                );
+                let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+                let turn =
+                    glam::DQuat::from_xyzw(a * u2.sin(), a * u2.cos(), b * u3.sin(), b * u3.cos());
+                let axes = DVec3::from_array(stats.axes) * d;
+                (
+                    glam::DMat3::from_diagonal(axes.recip())
+                        * glam::DMat3::from_quat(turn).transpose(),
+                    axes.max_element(),
+                )
+            });
             out.push(Particle {
                 centre: DVec3::new(u(1), u(2), u(3)) * side,
-                radius: d / 2.0,
+                radius: equal * d,
+                ellipsoid,
             });
         }
     }
@@ -242,7 +288,8 @@ mod tests {
             edges: vec![0.0, 4.0, 8.0, 12.0],
             per_volume: vec![1.0, 1.0, 0.5],
         };
-        let mut ps = draw(&dist, 64.0, 0.3, 5);
+        let stats = super::super::shape::Shape::Sphere.stats(0);
+        let mut ps = draw(&dist, 64.0, 0.3, &stats, 5);
         assert!(ps.len() > 100, "{}", ps.len());
         let before = overlap_fraction(&ps, 64.0);
         let after = anneal(&mut ps, 64.0, 5);

@@ -88,15 +88,19 @@ impl Distribution {
     }
 
     /// Volume of the particles per unit volume, for spheres (each bin's
-    /// particles at its centre size: `fine` gives the class densities
-    /// behind it where known).
+    /// particles at its centre size).
     pub fn sphere_volume_fraction(&self) -> f64 {
+        self.volume_fraction(std::f64::consts::PI / 6.0)
+    }
+
+    /// The same for particles of volume `factor` times their size cubed.
+    pub fn volume_fraction(&self, factor: f64) -> f64 {
         self.edges
             .windows(2)
             .zip(&self.per_volume)
             .map(|(e, n)| {
                 let d = (e[0] + e[1]) / 2.0;
-                n * std::f64::consts::PI / 6.0 * d.powi(3)
+                n * factor * d.powi(3)
             })
             .sum()
     }

@@ -31,7 +31,10 @@ regions. A floor over 1.5x of 2D means no such block meets the target.
 Every size prints, as "photo", the median figures of other N x N crops of
 the same photograph against the exemplar crop.
 
-Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize]
+`--methods ... stereology` adds issue 26's particle block (`organtex
+stereology` on the whole photograph), its slices measured the same way.
+
+Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize stereology]
                               [--floor] [--organtex target/release/organtex]
                               [IMAGE ...]
   default images: the database's gravel and ihc photographs, and grass (a
@@ -141,6 +144,34 @@ def block(organtex, image, side, method, tmp):
     return float(seconds.group(1)), axes
 
 
+def stereology_block(organtex, image, side, tmp):
+    """`organtex stereology` on the whole photograph (it needs many
+    profiles), its slices measured like synth3d's: seconds, and per axis
+    (axis, coherence, completeness, seam)."""
+    import numpy as np
+    from PIL import Image
+    block = tmp / "particles.nrrd"
+    out = run([organtex, "stereology", image, "--size", side, "-o", block, "--json"])
+    seconds = sum(json.loads(out)["seconds"].values())
+    data = block.read_bytes()
+    voxels = np.frombuffer(data[data.index(b"\n\n") + 2:], np.uint8).reshape(side, side, side, 3)  # z, y, x
+    axes = []
+    for axis, name in enumerate("xyz"):
+        figures = []
+        for k in range(4):
+            i = k * side // 4
+            # Volume::slice's layout: across x (y, z), across y (x, z), across z (x, y).
+            sl = [voxels[:, :, i], voxels[:, i, :], voxels[i, :, :]][axis]
+            path = tmp / "slice.png"
+            Image.fromarray(np.ascontiguousarray(sl)).save(path)
+            figures.append(quality(organtex, image, side, path))
+        seam_x = float(np.abs(voxels[:, :, 0].astype(int) - voxels[:, :, -1]).mean())
+        inner = float(np.abs(voxels[:, :, 1:].astype(int) - voxels[:, :, :-1]).mean())
+        axes.append((name, statistics.mean(f["coherence"] for f in figures),
+                     statistics.mean(f["completeness"] for f in figures), seam_x / max(inner, 1e-9)))
+    return seconds, axes
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("images", nargs="*", type=Path)
@@ -150,7 +181,7 @@ def main():
                         help="also print the photograph's other crops' figures and the coherence floor of region-copying blocks (module doc)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
-    pyenv.ensure(["pillow"], __file__)
+    pyenv.ensure(["pillow", "numpy"], __file__)
     images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png", SOURCES / "grass.png"]
 
     print(f"{'exemplar':<12}{'size':>5}  {'method':<9}{'time s':>8}  {'axis':<5}{'coh':>7}{'comp':>7}"
@@ -170,7 +201,10 @@ def main():
                     print(f"{image.stem:<12}{side:>5}  {'floor':<9}{'':>8}  {'x|z':<5}{least:7.2f}{'':>7}"
                           f"{least / coh2:8.2f}    ({parts})", flush=True)
                 for method in args.methods:
-                    seconds, axes = block(args.organtex, image, side, method, tmp)
+                    if method == "stereology":
+                        seconds, axes = stereology_block(args.organtex, image, side, tmp)
+                    else:
+                        seconds, axes = block(args.organtex, image, side, method, tmp)
                     for k, (axis, coh, comp, seam) in enumerate(axes):
                         near_2d = coh <= LIMIT * coh2 and comp <= LIMIT * comp2
                         near_photo = coh <= coh_p and comp <= comp_p

@@ -139,6 +139,27 @@ pub fn thousands(n: usize) -> String {
 /// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
 /// naming the form expected.
 /// A finite length above 0 (`--edge-length`, `--scale`).
+/// `path` must end in `.ext` (any case): the file a command writes.
+fn require_extension(path: &std::path::Path, ext: &str) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
+        _ => {
+            Err(organtex::Error::invalid(format!("the output must be a .{ext} file")).in_file(path))
+        }
+    }
+}
+
+/// A block's `--spacing` (object units a voxel spans) must be positive.
+fn check_spacing(spacing: f64) -> Result<()> {
+    if spacing.is_finite() && spacing > 0.0 {
+        Ok(())
+    } else {
+        Err(organtex::Error::invalid(format!(
+            "--spacing must be a positive number, not {spacing}"
+        )))
+    }
+}
+
 fn positive_length(s: &str) -> std::result::Result<f64, String> {
     s.trim()
         .parse::<f64>()

@@ -47,13 +47,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("nrrd"))
-    {
-        return Err(Error::invalid("the output must be a .nrrd file").in_file(&args.output));
-    }
+    super::require_extension(&args.output, "nrrd")?;
     let opts = StereologyOptions {
         size: args.size,
         bins: args.bins,

@@ -59,19 +59,8 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("nrrd"))
-    {
-        return Err(Error::invalid("the output must be a .nrrd file").in_file(&args.output));
-    }
-    if !(args.spacing.is_finite() && args.spacing > 0.0) {
-        return Err(Error::invalid(format!(
-            "--spacing must be a positive number, not {}",
-            args.spacing
-        )));
-    }
+    super::require_extension(&args.output, "nrrd")?;
+    super::check_spacing(args.spacing)?;
     let axis = args.axis as usize;
     let section = Image::from_rgb(&read_image(&args.section)?.to_rgb8());
     let skin = args

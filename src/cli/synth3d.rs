@@ -1,6 +1,6 @@
 //! `organtex synth3d SRC --size N -o BLOCK.nrrd`: a solid texture block.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use organtex::synth::block::{BlockOptions, Method, synthesize_block};
 use organtex::synth::exemplar::{Crop, Exemplar};
@@ -79,24 +79,12 @@ pub struct Args {
     slices: Option<PathBuf>,
 }
 
-fn require_extension(path: &Path, ext: &str) -> Result<()> {
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
-        _ => Err(Error::invalid(format!("the output must be a .{ext} file")).in_file(path)),
-    }
-}
-
 pub fn run(args: Args) -> Result<()> {
-    require_extension(&args.output, "nrrd")?;
+    super::require_extension(&args.output, "nrrd")?;
     if let Some(s) = &args.slices {
-        require_extension(s, "png")?;
+        super::require_extension(s, "png")?;
     }
-    if !(args.spacing.is_finite() && args.spacing > 0.0) {
-        return Err(Error::invalid(format!(
-            "--spacing must be a positive number, not {}",
-            args.spacing
-        )));
-    }
+    super::check_spacing(args.spacing)?;
     if args.layered {
         return run_layered(&args);
     }

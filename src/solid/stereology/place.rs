@@ -56,7 +56,8 @@ pub fn draw(
 ) -> Vec<Particle> {
     let box_volume = side.powi(3);
     let natural = dist.volume_fraction(stats.volume);
-    let sphere = stats.axes.iter().all(|&a| (a - 0.5).abs() < 1e-12);
+    // Equal semi-axes: a sphere, drawn without an orientation.
+    let sphere = stats.axes[0] == stats.axes[2];
     // The radius of the sphere of the same volume, per unit size.
     let equal = (stats.volume * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
     let scale = if natural > 0.0 {

@@ -76,14 +76,7 @@ pub fn find(
         if b == 0 {
             continue;
         }
-        let (x, y) = (i % width, i / width);
-        let around = [
-            (x > 0).then(|| i - 1),
-            (x + 1 < width).then(|| i + 1),
-            (y > 0).then(|| i - width),
-            (y + 1 < height).then(|| i + width),
-        ];
-        for j in around.into_iter().flatten() {
+        for j in four_neighbours(i, width, height).into_iter().flatten() {
             let c = comp[j];
             if c == 0 {
                 continue;
@@ -198,6 +191,18 @@ pub fn find(
     })
 }
 
+/// Pixel `i`'s left, right, upper and lower neighbours, where the image
+/// has them.
+fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
+    let (x, y) = (i % width, i / width);
+    [
+        (x > 0).then(|| i - 1),
+        (x + 1 < width).then(|| i + 1),
+        (y > 0).then(|| i - width),
+        (y + 1 < height).then(|| i + width),
+    ]
+}
+
 /// 4-connected components of the usable pixels where `inside` holds:
 /// per pixel its component (1-based, 0 outside), and per component whether
 /// it touches the image's border or an unusable pixel.
@@ -223,13 +228,7 @@ fn components(
             if x == 0 || y == 0 || x + 1 == width || y + 1 == height {
                 touch = true;
             }
-            let around = [
-                (x > 0).then(|| i - 1),
-                (x + 1 < width).then(|| i + 1),
-                (y > 0).then(|| i - width),
-                (y + 1 < height).then(|| i + width),
-            ];
-            for j in around.into_iter().flatten() {
+            for j in four_neighbours(i, width, height).into_iter().flatten() {
                 if !valid[j] {
                     touch = true;
                 } else if inside(j) && label[j] == 0 {

@@ -203,6 +203,18 @@ impl<'a> Layered<'a> {
                 })
                 .collect::<Vec<u32>>()
         });
+        Ok(Layered::with_coords(e, n, coord, rows))
+    }
+
+    /// A level from its coordinates, each voxel the mean of its two
+    /// planes' pixels until the first blend (from the finer exemplar's
+    /// pixels, not the parents' blend, which would leave 2 x 2 blocks).
+    fn with_coords(
+        e: &'a Exemplar,
+        n: usize,
+        coord: [Vec<u32>; 2],
+        rows: Vec<Vec<u32>>,
+    ) -> Layered<'a> {
         let colour = (0..n * n * n)
             .map(|v| {
                 mean(
@@ -211,13 +223,13 @@ impl<'a> Layered<'a> {
                 )
             })
             .collect();
-        Ok(Layered {
+        Layered {
             e,
             n,
             coord,
             colour,
             rows,
-        })
+        }
     }
 
     /// The next finer level: each coordinate's child at the voxel's offset
@@ -245,23 +257,7 @@ impl<'a> Layered<'a> {
                 })
                 .collect::<Vec<u32>>()
         });
-        // Colours from the children's pixels (the finer exemplar's detail),
-        // not the parents' blend, which would leave 2 x 2 blocks.
-        let colour = (0..n * n * n)
-            .map(|v| {
-                mean(
-                    e.pixels[coord[0][v] as usize],
-                    e.pixels[coord[1][v] as usize],
-                )
-            })
-            .collect();
-        Layered {
-            e,
-            n,
-            coord,
-            colour,
-            rows: Self::rows(e),
-        }
+        Layered::with_coords(e, n, coord, Self::rows(e))
     }
 
     /// The voxel at in-plane offset (du, dv) from voxel `v` in plane `a`:

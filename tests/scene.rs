@@ -10,8 +10,8 @@ use organtex::mesh::{Components, Topology, TriMesh};
 use organtex::progress::{Progress, Silent};
 use organtex::scene::bake::{BakeOptions, BakeReport, Baked, bake};
 use organtex::scene::uterus::{self, CavityParams};
+use organtex::solid::InteriorMethod;
 use organtex::solid::section::{Plane, plane_section};
-use organtex::synth::block::Method;
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result};
 
@@ -731,7 +731,7 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
         (
             "block_size = 5.0",
             "block_size = 5.0\nmethod = \"lapped\"",
-            "unknown variant `lapped`, expected `fnpts` or `optimize`",
+            "unknown variant `lapped`, expected one of `fnpts`, `optimize`, `stereology`",
             "lapped",
         ),
     ];
@@ -789,10 +789,73 @@ fn the_scene_chooses_how_its_interior_is_synthesised() {
         blocks.push((interior.method, block.voxels));
     }
     // FNPTS by default; the method named is the one run.
-    assert_eq!(blocks[0].0, Method::Fnpts);
+    assert_eq!(blocks[0].0, InteriorMethod::Fnpts);
     assert_eq!(blocks[1], blocks[0]);
-    assert_eq!(blocks[2].0, Method::Optimize);
+    assert_eq!(blocks[2].0, InteriorMethod::Optimize);
     assert_ne!(blocks[2].1, blocks[0].1);
+}
+
+#[test]
+fn a_scene_interior_can_be_particles_from_stereology() {
+    // A photograph of a section: dark discs 3-6 px across on a light
+    // binder, 1/4 of its area, beside the scene file.
+    let dir = tempfile::tempdir().unwrap();
+    let side = 192u32;
+    let mut photo = image::RgbImage::from_pixel(side, side, image::Rgb([225, 190, 200]));
+    for k in 0..400u32 {
+        let (cx, cy) = (
+            (k * 97 % side) as f64,
+            (k * 61 % side + k / 16) as f64 % side as f64,
+        );
+        let r = 1.5 + (k % 4) as f64 * 0.5;
+        for y in 0..side {
+            for x in 0..side {
+                if (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy) < r {
+                    photo.put_pixel(x, y, image::Rgb([110, 40, 120]));
+                }
+            }
+        }
+    }
+    photo.save(dir.path().join("section.png")).unwrap();
+    let body = small_scene(0.0, 10.0, [0.0, 0.0]).replace(
+        "block_size = 5.0",
+        "block_size = 5.0\nmethod = \"stereology\"\nphotographs = [\"section.png\"]",
+    );
+    let scene = scene_file(dir.path(), "s.toml", &body);
+    let out = dir.path().join("out");
+    let baked = bake(&scene, &out, &BakeOptions::default(), &Silent).unwrap();
+    let interior = &baked.report.interiors[0];
+    assert_eq!(interior.method, InteriorMethod::Stereology);
+    let block = Volume::read_nrrd(&out.join(&interior.file)).unwrap();
+    assert_eq!(block.size, [16; 3]);
+    // The particles' share of the block is the photograph's, within 10%
+    // relative, and the block still tiles.
+    let dark = |c: &[u8; 3]| (c[0] as u32 + c[1] as u32 + c[2] as u32) < 3 * 150;
+    let photo_share = photo.pixels().filter(|p| dark(&p.0)).count() as f64 / (side * side) as f64;
+    let block_share =
+        block.voxels.iter().filter(|c| dark(c)).count() as f64 / block.voxels.len() as f64;
+    assert!(
+        (block_share / photo_share - 1.0).abs() < 0.1,
+        "particles {block_share:.3} of the block, {photo_share:.3} of the photograph"
+    );
+    for axis in 0..3 {
+        assert!(block.seam(axis) <= 1.15, "axis {axis}");
+    }
+    // A photograph that is not there is named.
+    let missing = scene_file(
+        dir.path(),
+        "m.toml",
+        &body.replace("section.png", "gone.png"),
+    );
+    let err = bake(
+        &missing,
+        &dir.path().join("out2"),
+        &BakeOptions::default(),
+        &Silent,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("gone.png"), "{err}");
 }
 
 #[test]

@@ -33,9 +33,12 @@ the same photograph against the exemplar crop.
 
 `--methods ... stereology` adds issue 26's particle block (`organtex
 stereology` on the whole photograph), its slices measured the same way.
+Since it copies from the whole photograph, `--whole` gives every method
+the whole photograph as exemplar and measures every slice against it: the
+fair comparison for stereology.
 
 Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize stereology]
-                              [--floor] [--organtex target/release/organtex]
+                              [--floor] [--whole] [--organtex target/release/organtex]
                               [IMAGE ...]
   default images: the database's gravel and ihc photographs, and grass (a
   photograph the block synthesis was never tuned on).
@@ -63,6 +66,15 @@ TIME = re.compile(r"exemplar\(s\) in ([\d.]+) s$", re.M)
 SEAM_LIMIT = 1.15
 
 
+# --whole: every method's exemplar, and what slices are measured against,
+# is the whole photograph instead of its top-left crop.
+WHOLE = False
+
+
+def crop_args(side):
+    return [] if WHOLE else ["--crop", f"0,0,{side},{side}"]
+
+
 def run(cmd):
     out = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
     if out.returncode != 0:
@@ -72,18 +84,17 @@ def run(cmd):
 
 def reference(organtex, image, side, tmp):
     """The 2D synthesiser's median coherence and completeness over 3 seeds."""
-    crop = f"0,0,{side},{side}"
     figures = []
     for seed in range(3):
         texture = tmp / f"flat_{seed}.png"
-        run([organtex, "synth", image, "--crop", crop, "--size", side, "--tileable", "--seed", seed, "-o", texture])
+        run([organtex, "synth", image, *crop_args(side), "--size", side, "--tileable", "--seed", seed, "-o", texture])
         figures.append(quality(organtex, image, side, texture))
     return (statistics.median(f["coherence"] for f in figures),
             statistics.median(f["completeness"] for f in figures))
 
 
 def quality(organtex, image, side, texture):
-    return json.loads(run([organtex, "synth-quality", image, texture, "--crop", f"0,0,{side},{side}"]))
+    return json.loads(run([organtex, "synth-quality", image, texture, *crop_args(side)]))
 
 
 def floor(organtex, image, side, tmp):
@@ -122,6 +133,9 @@ def photo(organtex, image, side, tmp):
     from PIL import Image
     full = Image.open(image).convert("RGB")
     figures = []
+    if WHOLE:
+        # Crops of the photograph are part of it: nothing to compare.
+        return float("nan"), float("nan")
     for x, y in [(side, 0), (0, side), (side, side)]:
         if x + side <= full.width and y + side <= full.height:
             path = tmp / "crop.png"
@@ -135,7 +149,7 @@ def photo(organtex, image, side, tmp):
 
 def block(organtex, image, side, method, tmp):
     """Seconds, and per axis (axis, coherence, completeness, seam)."""
-    out = run([organtex, "synth3d", image, "--crop", f"0,0,{side},{side}", "--size", side,
+    out = run([organtex, "synth3d", image, *crop_args(side), "--size", side,
                "--method", method, "-o", tmp / "block.nrrd"])
     axes = [(a, float(c), float(k), float(s)) for a, c, k, s in SLICE.findall(out)]
     seconds = TIME.search(out)
@@ -179,8 +193,13 @@ def main():
     parser.add_argument("--methods", nargs="*", default=["fnpts", "optimize"])
     parser.add_argument("--floor", action="store_true",
                         help="also print the photograph's other crops' figures and the coherence floor of region-copying blocks (module doc)")
+    parser.add_argument("--whole", action="store_true",
+                        help="every method's exemplar, and the reference its slices are measured against, is the "
+                             "whole photograph (stereology needs many profiles, so it always reads all of it)")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
+    global WHOLE
+    WHOLE = args.whole
     pyenv.ensure(["pillow", "numpy"], __file__)
     images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png", SOURCES / "grass.png"]
 

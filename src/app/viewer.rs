@@ -18,8 +18,8 @@ use crate::error::{Error, Result};
 use crate::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
 use crate::scene::build::{BakedScene, Tissues, ensure_tissues};
 use crate::scene::draw::DrawList;
+use crate::solid::InteriorMethod;
 use crate::solid::{Placement, Plane, interior_block, plane_section};
-use crate::synth::block::Method;
 use crate::synth::volume::Volume;
 
 /// How the viewer starts.
@@ -527,14 +527,19 @@ impl Viewer {
             return;
         }
         let Some(doc) = &self.doc else { return };
-        let interior = doc
-            .spec
-            .nodes
-            .iter()
-            .find_map(|n| n.interior.as_ref().map(|i| (i.texture.clone(), i.method)));
-        let Some((tissue, method)) = interior.or_else(|| {
-            self.selected
-                .map(|f| (doc.settings(f).texture.clone(), Method::default()))
+        let interior = doc.spec.nodes.iter().find_map(|n| {
+            n.interior
+                .as_ref()
+                .map(|i| (i.texture.clone(), i.method, i.photographs.clone()))
+        });
+        let Some((tissue, method, photographs)) = interior.or_else(|| {
+            self.selected.map(|f| {
+                (
+                    doc.settings(f).texture.clone(),
+                    InteriorMethod::default(),
+                    Vec::new(),
+                )
+            })
         }) else {
             return;
         };
@@ -561,9 +566,17 @@ impl Viewer {
                 if !crate::db::build::is_current(&db, t)? {
                     crate::db::build(&db, std::slice::from_ref(&tissue), p)?;
                 }
+                // Stereology's voxels are the photographs' pixels: 32 would
+                // hold few particles.
+                let size = if method == InteriorMethod::Stereology {
+                    64
+                } else {
+                    32
+                };
                 let block = interior_block(
                     &db.output_path(&tissue, crate::db::Output::Colour),
-                    32,
+                    &photographs,
+                    size,
                     method,
                     0,
                     p,

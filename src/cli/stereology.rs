@@ -3,9 +3,8 @@
 
 use std::path::PathBuf;
 
-use organtex::solid::stereology::{self, StereologyOptions, profiles};
-use organtex::synth::exemplar::read_image;
-use organtex::{Error, Result};
+use organtex::Result;
+use organtex::solid::stereology::{self, StereologyOptions};
 
 use super::progress::Bars;
 
@@ -27,6 +26,12 @@ pub struct Args {
     /// scale), its unfolding kernel by Monte Carlo slicing.
     #[arg(long, default_value = "sphere", value_parser = stereology::shape::Shape::parse)]
     shape: stereology::shape::Shape,
+    /// How particles and binder get the photographs' texture: copied (the
+    /// block synthesiser copies the largest photograph's pixels, particle
+    /// voxels from particle pixels) or residual (seed 001: mean colours
+    /// plus the residual resynthesised by pyramid histogram matching).
+    #[arg(long, default_value = "copied")]
+    detail: stereology::Detail,
     /// Voxels a side (a voxel is a pixel of the photographs).
     #[arg(long, value_name = "N")]
     size: usize,
@@ -53,44 +58,17 @@ pub fn run(args: Args) -> Result<()> {
         bins: args.bins,
         seed: args.seed,
         shape: args.shape,
+        detail: args.detail,
     };
     opts.check()?;
-    let mask = args
-        .mask
-        .as_ref()
-        .map(|m| read_image(m).map(|i| i.to_luma8()))
-        .transpose()?;
-    let mut sections = Vec::new();
-    let mut first = None;
-    for (k, path) in args.photos.iter().enumerate() {
-        let img = read_image(path)?.to_rgb8();
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        let valid: Vec<bool> = match &mask {
-            Some(m) if (m.width() as usize, m.height() as usize) != (w, h) => {
-                return Err(Error::invalid(format!(
-                    "the mask is {}x{} but the photograph is {w}x{h}",
-                    m.width(),
-                    m.height()
-                ))
-                .in_file(path));
-            }
-            Some(m) => m.pixels().map(|p| p.0[0] > 127).collect(),
-            None => vec![true; w * h],
-        };
-        let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
-        let section =
-            profiles::find(w, h, &pixels, &valid, args.seed).map_err(|e| e.in_file(path))?;
-        if k == 0 {
-            first = Some((pixels, section.clone()));
-        }
-        sections.push(section);
-    }
+    let sections = stereology::read_sections(&args.photos, args.mask.as_deref(), args.seed)?;
     let bars = Bars::new();
     let (volume, report) =
         stereology::synthesize(&sections, &opts, &bars).map_err(|e| e.in_file(&args.photos[0]))?;
     bars.finish();
     volume.write_nrrd(&args.output)?;
-    if let (Some(path), Some((pixels, s))) = (&args.profiles_out, first) {
+    if let Some(path) = &args.profiles_out {
+        let (s, pixels) = (&sections[0], &sections[0].pixels);
         let picture = image::RgbImage::from_fn(s.width as u32, s.height as u32, |x, y| {
             let i = y as usize * s.width + x as usize;
             image::Rgb(match s.labels[i] {

@@ -23,8 +23,7 @@ use super::{file, gltf};
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
-use crate::solid::interior_block;
-use crate::synth::block::Method;
+use crate::solid::{InteriorMethod, interior_block};
 use crate::synth::volume::Volume;
 
 /// How a bake runs.
@@ -54,8 +53,8 @@ pub struct InteriorLine {
     pub node: String,
     /// The tissue it was synthesised from.
     pub texture: String,
-    /// How the block was synthesised.
-    pub method: Method,
+    /// How the block was made.
+    pub method: InteriorMethod,
     /// Relative to the bake's folder.
     pub file: PathBuf,
     pub voxels: usize,
@@ -348,7 +347,15 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
                 node.name, interior.texture
             ))
         })?;
-        let mut volume = interior_block(colour, n, interior.method, k as u64, progress)?;
+        let mut volume = interior_block(
+            colour,
+            &interior.photographs,
+            n,
+            interior.method,
+            k as u64,
+            progress,
+        )
+        .map_err(|e| Error::invalid(format!("node '{}': interior: {e}", node.name)))?;
         volume.spacing = interior.block_size / n as f64;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let mut stem = file_name(&node.name);

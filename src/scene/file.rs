@@ -16,6 +16,7 @@ use toml::Spanned;
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
 use crate::memory::{block_bytes, check, product};
+use crate::solid::InteriorMethod;
 use crate::synth::block::{MAX_BLOCK, Method};
 use crate::unwrap::seamster::SeamOptions;
 
@@ -125,10 +126,15 @@ pub struct Interior {
     /// Mesh units covered by one block.
     #[serde(default = "default_block_size")]
     pub block_size: f64,
-    /// How the block is synthesised: "fnpts" (sharp; streaks on cuts
-    /// across x) or "optimize" (no streaks, softer).
+    /// How the block is made: "fnpts" (sharp; streaks on cuts across x),
+    /// "optimize" (no streaks, softer) or "stereology" (particles in a
+    /// binder measured in `photographs`, seed 001).
     #[serde(default)]
-    pub method: Method,
+    pub method: InteriorMethod,
+    /// Photographs of sections for `method = "stereology"`, relative to
+    /// the scene file (none: the tissue's colour texture).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub photographs: Vec<PathBuf>,
     /// Also fill the node's inside with tetrahedra (isosurface stuffing at
     /// the default resolution), written as interior/NODE.vtk for the
     /// simulator's physics and for lapped solid textures.
@@ -335,7 +341,11 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
         .collect();
     if let Some(worst) = interiors
         .iter()
-        .map(|i| block_bytes(spec.bake.interior_voxels, 1, i.method))
+        .map(|i| {
+            // Stereology copies its photograph by guided FNPTS.
+            let method = i.method.block().unwrap_or(Method::Fnpts);
+            block_bytes(spec.bake.interior_voxels, 1, method)
+        })
         .max()
     {
         let n = spec.bake.interior_voxels;
@@ -599,6 +609,21 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                 format!("must be a positive number of mesh units, not {size}"),
             ));
         }
+        let i = interior.get_ref();
+        if i.method != InteriorMethod::Stereology && !i.photographs.is_empty() {
+            return Err(at(
+                interior.span(),
+                "interior photographs",
+                "are measured by method = \"stereology\" alone".to_string(),
+            ));
+        }
+        if let Some(missing) = i.photographs.iter().find(|p| !dir.join(p).is_file()) {
+            return Err(at(
+                interior.span(),
+                "interior photographs",
+                format!("{} not found", dir.join(missing).display()),
+            ));
+        }
         if let Some(lst) = &interior.get_ref().lst {
             let bad = |msg: String| at(interior.span(), "interior lst", msg);
             let kind =
@@ -665,7 +690,15 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
         name: node.name.clone(),
         mesh,
         facets,
-        interior: node.interior.as_ref().map(|i| i.get_ref().clone()),
+        interior: node.interior.as_ref().map(|i| Interior {
+            photographs: i
+                .get_ref()
+                .photographs
+                .iter()
+                .map(|p| dir.join(p))
+                .collect(),
+            ..i.get_ref().clone()
+        }),
         origin: Origin {
             file: path.to_path_buf(),
             line: line_of(text, node.mesh.span().start),

@@ -6,9 +6,11 @@
 //! `interior_block` makes a block from a tissue: the tissue's tileable
 //! colour texture, brought down to twice the block's side (a block copies
 //! neighbourhoods of the exemplar's scale; a much larger exemplar only
-//! costs search time), synthesised into a tiling block (seed 004, 3.3).
+//! costs search time), synthesised into a tiling block (seed 004, 3.3);
+//! or particles from stereology (seed 001) measured in photographs of
+//! sections, at the photographs' own scale.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -44,14 +46,59 @@ impl Interior for Block<'_> {
     }
 }
 
-/// A `size`^3 block from the colour texture at `colour`, by `method`.
+/// How a node's interior block is made (`[node.interior] method`; scene
+/// files name it in lower case).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InteriorMethod {
+    /// Block synthesis by FNPTS (sharp; streaks on cuts across x).
+    #[default]
+    Fnpts,
+    /// Block synthesis by texture optimisation (no streaks, softer).
+    Optimize,
+    /// Particles in a binder from stereology (seed 001), measured in the
+    /// node's photographs of sections.
+    Stereology,
+}
+
+impl InteriorMethod {
+    /// The block synthesis method, if it is one.
+    pub fn block(self) -> Option<Method> {
+        match self {
+            InteriorMethod::Fnpts => Some(Method::Fnpts),
+            InteriorMethod::Optimize => Some(Method::Optimize),
+            InteriorMethod::Stereology => None,
+        }
+    }
+}
+
+/// A `size`^3 block by `method`: from the colour texture at `colour`, or
+/// for stereology from `photographs` (the colour texture where none are
+/// given).
 pub fn interior_block(
     colour: &Path,
+    photographs: &[PathBuf],
     size: usize,
-    method: Method,
+    method: InteriorMethod,
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<Volume> {
+    let Some(method) = method.block() else {
+        let paths = if photographs.is_empty() {
+            vec![colour.to_path_buf()]
+        } else {
+            photographs.to_vec()
+        };
+        let sections = super::stereology::read_sections(&paths, None, seed)?;
+        let opts = super::stereology::StereologyOptions {
+            size,
+            seed,
+            ..Default::default()
+        };
+        return super::stereology::synthesize(&sections, &opts, progress)
+            .map(|(volume, _)| volume)
+            .map_err(|e| e.in_file(&paths[0]));
+    };
     let side = 2 * size as u32;
     let img = read_image(colour)?
         .resize_exact(side, side, image::imageops::FilterType::Triangle)

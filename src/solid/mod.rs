@@ -15,5 +15,5 @@ pub use cut::{
     Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,
     sample_points, section_glb, texture_coordinates, texture_surface,
 };
-pub use interior::{Block, Interior, interior_block};
+pub use interior::{Block, Interior, InteriorMethod, interior_block};
 pub use section::{Frame, Plane, Section, capped, plane_section};

@@ -98,16 +98,90 @@ pub fn synthesize_block(
     opts: &BlockOptions,
     progress: &dyn Progress,
 ) -> Result<Volume> {
+    synthesize(exemplars, opts, None, progress)
+}
+
+/// A class map the block follows (3D "texture by numbers"): a class per
+/// exemplar pixel and per voxel. Copying a pixel of another class than
+/// the voxel's costs as much as if every window pixel of each plane were
+/// `weight` levels off in each channel. Stereology (seed 001) lays out its
+/// particles this way and the photograph's own texture fills them.
+#[derive(Clone, Debug)]
+pub struct Guide {
+    /// Per exemplar pixel, row by row.
+    pub exemplar: Vec<u8>,
+    /// Per voxel, x fastest, `size`^3 of them.
+    pub block: Vec<u8>,
+    pub weight: f64,
+}
+
+/// FNPTS block synthesis from one exemplar that follows `guide` (rolled
+/// like any block, so the classes move with it).
+pub fn synthesize_guided(
+    exemplar: &Exemplar,
+    guide: &Guide,
+    opts: &BlockOptions,
+    progress: &dyn Progress,
+) -> Result<Volume> {
+    let n = opts.size;
+    if guide.exemplar.len() != exemplar.pixels.len() || guide.block.len() != n * n * n {
+        return Err(Error::invalid(format!(
+            "a guide needs a class per exemplar pixel ({}) and per voxel ({}), not {} and {}",
+            exemplar.pixels.len(),
+            n * n * n,
+            guide.exemplar.len(),
+            guide.block.len()
+        )));
+    }
+    let opts = BlockOptions {
+        method: Method::Fnpts,
+        ..opts.clone()
+    };
+    synthesize(std::slice::from_ref(exemplar), &opts, Some(guide), progress)
+}
+
+fn synthesize(
+    exemplars: &[Exemplar],
+    opts: &BlockOptions,
+    guide: Option<&Guide>,
+    progress: &dyn Progress,
+) -> Result<Volume> {
     let levels = check_options(exemplars, opts)?;
-    let pyramid = pyramid(exemplars, opts.neighbourhood, levels)?;
+    let pyramid = pyramid(exemplars, opts.neighbourhood, levels, guide)?;
+    // The voxels' classes at each level, finest first: each coarse voxel
+    // the most common class of its 8 children.
+    let mut block_classes: Vec<Vec<u8>> = guide.map(|g| vec![g.block.clone()]).unwrap_or_default();
+    while guide.is_some() && block_classes.len() < levels {
+        let fine = block_classes.last().expect("the finest level");
+        let n = opts.size >> block_classes.len();
+        let coarse = (0..n * n * n)
+            .map(|v| {
+                let [x, y, z] = Grid(n).xyz(v).map(|c| 2 * c as usize);
+                let f = 2 * n;
+                let children: [u8; 8] = std::array::from_fn(|k| {
+                    fine[((z + k / 4) * f + y + k / 2 % 2) * f + x + k % 2]
+                });
+                most_common(&children)
+            })
+            .collect();
+        block_classes.push(coarse);
+    }
     progress.stage("block synthesis", (levels * opts.iterations) as u64);
     let mut state: Option<Block> = None;
     for (l, sources) in pyramid.iter().enumerate().rev() {
         check(progress)?;
         let grid = Grid(opts.size >> l);
+        let classes = guide.map(|g| GuideLevel {
+            block: std::mem::take(&mut block_classes[l]),
+            penalty: (g.weight
+                * 3.0
+                * opts.iterations as f64
+                * 3.0
+                * opts.neighbourhood.pow(2) as f64) as i64,
+        });
         let mut block = match state.take() {
-            None => Block::random(sources, grid, opts),
-            Some(coarse) => coarse.refine(sources, grid),
+            None => Block::random(sources, grid, opts, classes),
+            Some(coarse) => coarse.refine(sources, grid, classes),
         };
         for round in 0..opts.iterations {
             check(progress)?;
@@ -124,6 +198,21 @@ pub fn synthesize_block(
         .expect("at least one level")
         .volume()
         .rolled_to_smoothest_wrap())
+}
+
+/// The most common of a few classes (ties: the larger class).
+fn most_common(classes: &[u8]) -> u8 {
+    let count = |c: u8| classes.iter().filter(|&&d| d == c).count();
+    *classes
+        .iter()
+        .max_by_key(|&&c| (count(c), c))
+        .expect("some classes")
+}
+
+/// A guide's voxel classes at one level and what a class mismatch costs.
+struct GuideLevel {
+    block: Vec<u8>,
+    penalty: i64,
 }
 
 /// The largest block side, in voxels: 256^3 voxels take about 200 MB of
@@ -190,6 +279,9 @@ struct Sources {
     /// Which of `ex` each axis plane matches.
     of_axis: [usize; 3],
     buckets: Vec<ColourBuckets>,
+    /// With a guide: each pixel's class, and the usable pixels of each
+    /// class.
+    classes: Option<(Vec<u8>, Vec<Vec<u32>>)>,
 }
 
 impl Sources {
@@ -228,7 +320,12 @@ impl Sources {
 }
 
 /// Finest level first.
-fn pyramid(exemplars: &[Exemplar], k: usize, levels: usize) -> Result<Vec<Sources>> {
+fn pyramid(
+    exemplars: &[Exemplar],
+    k: usize,
+    levels: usize,
+    guide: Option<&Guide>,
+) -> Result<Vec<Sources>> {
     let mut chains: Vec<Vec<Exemplar>> = exemplars.iter().map(|e| vec![e.clone()]).collect();
     for chain in &mut chains {
         while chain.len() < levels {
@@ -246,6 +343,20 @@ fn pyramid(exemplars: &[Exemplar], k: usize, levels: usize) -> Result<Vec<Source
     } else {
         [0, 1, 2]
     };
+    // The pixels' classes at each level: each coarse pixel the most common
+    // class of its 4 children.
+    let mut pixel_classes: Vec<Vec<u8>> =
+        guide.map(|g| vec![g.exemplar.clone()]).unwrap_or_default();
+    while guide.is_some() && pixel_classes.len() < levels {
+        let l = pixel_classes.len();
+        let (fine, coarse) = (&chains[0][l - 1], &chains[0][l]);
+        let of = pixel_classes.last().expect("the finest level");
+        let next = (0..coarse.height)
+            .flat_map(|y| (0..coarse.width).map(move |x| (x, y)))
+            .map(|(x, y)| most_common(&fine.children(x, y).map(|i| of[i])))
+            .collect();
+        pixel_classes.push(next);
+    }
     (0..levels)
         .map(|l| {
             let valid: Vec<bool> = (0..chains[0][l].valid.len())
@@ -264,10 +375,21 @@ fn pyramid(exemplars: &[Exemplar], k: usize, levels: usize) -> Result<Vec<Source
                 })
                 .collect();
             let buckets = ex.iter().map(ColourBuckets::new).collect();
+            let classes = pixel_classes.get(l).map(|of| {
+                let count = of.iter().copied().max().unwrap_or(0) as usize + 1;
+                let mut members = vec![Vec::new(); count];
+                for (i, &c) in of.iter().enumerate() {
+                    if valid[i] {
+                        members[c as usize].push(i as u32);
+                    }
+                }
+                (of.clone(), members)
+            });
             Ok(Sources {
                 ex,
                 of_axis,
                 buckets,
+                classes,
             })
         })
         .collect()
@@ -435,9 +557,16 @@ fn plane_candidates(
     }
 }
 
-/// `count` random usable coordinates.
-fn random_candidates(src: &Sources, seed: u64, key: [u64; 3], count: usize, out: &mut Vec<u32>) {
-    let usable = &src.buckets[0].usable;
+/// `count` random coordinates of `pool` (usable ones).
+fn random_candidates(
+    src: &Sources,
+    pool: &[u32],
+    seed: u64,
+    key: [u64; 3],
+    count: usize,
+    out: &mut Vec<u32>,
+) {
+    let usable = pool;
     for k in 0..count {
         let s = usable[rng::below(
             seed,
@@ -465,21 +594,42 @@ struct Block<'a> {
     usage: Vec<u32>,
     share: f64,
     method: Method,
+    guide: Option<GuideLevel>,
 }
 
 impl<'a> Block<'a> {
-    /// Coarsest level: random usable coordinates, not yet iterated.
-    fn random(src: &'a Sources, grid: Grid, opts: &BlockOptions) -> Self {
-        let usable = &src.buckets[0].usable;
+    /// Coarsest level: random usable coordinates (of the voxel's class,
+    /// with a guide), not yet iterated.
+    fn random(
+        src: &'a Sources,
+        grid: Grid,
+        opts: &BlockOptions,
+        guide: Option<GuideLevel>,
+    ) -> Self {
         let planes = if opts.method == Method::Fnpts { 1 } else { 3 };
         let coord = (0..planes as u64)
             .map(|a| {
                 (0..grid.len())
-                    .map(|v| usable[rng::below(opts.seed, &[u64::MAX, a, v as u64], usable.len())])
+                    .map(|v| {
+                        let pool = Self::pool(src, guide.as_ref(), v);
+                        pool[rng::below(opts.seed, &[u64::MAX, a, v as u64], pool.len())]
+                    })
                     .collect()
             })
             .collect();
-        Self::with_coords(src, grid, coord, 0, opts.method, None)
+        Self::with_coords(src, grid, coord, 0, opts.method, None, guide)
+    }
+
+    /// The coordinates voxel `v` draws random candidates from: the usable
+    /// pixels of its class, with a guide (all usable ones if it has none).
+    fn pool<'s>(src: &'s Sources, guide: Option<&GuideLevel>, v: usize) -> &'s [u32] {
+        match (&src.classes, guide) {
+            (Some((_, members)), Some(g)) => members
+                .get(g.block[v] as usize)
+                .filter(|m| !m.is_empty())
+                .unwrap_or(&src.buckets[0].usable),
+            _ => &src.buckets[0].usable,
+        }
     }
 
     fn with_coords(
@@ -489,6 +639,7 @@ impl<'a> Block<'a> {
         iterated: u8,
         method: Method,
         blended: Option<Vec<[u8; 3]>>,
+        guide: Option<GuideLevel>,
     ) -> Self {
         let colour = match method {
             Method::Fnpts => src
@@ -529,13 +680,14 @@ impl<'a> Block<'a> {
             usage,
             share: grid.len() as f64 / usable as f64,
             method,
+            guide,
         }
     }
 
     /// The next finer level: each coordinate doubled plus the voxel's
     /// offset within its parent in the plane (for FNPTS's shared
     /// coordinate, the plane across z), or the first usable child.
-    fn refine(self, src: &'a Sources, grid: Grid) -> Self {
+    fn refine(self, src: &'a Sources, grid: Grid, guide: Option<GuideLevel>) -> Self {
         let coarse = self.grid;
         let coarse_w = self.src.width() as u32;
         let parent = |v: usize| {
@@ -568,7 +720,7 @@ impl<'a> Block<'a> {
             .collect();
         let blended = (self.method == Method::Optimize)
             .then(|| (0..grid.len()).map(|v| self.colour[0][parent(v)]).collect());
-        Self::with_coords(src, grid, coord, 1, self.method, blended)
+        Self::with_coords(src, grid, coord, 1, self.method, blended, guide)
     }
 
     fn view(&self, axis: usize, missing: i64, iters: bool) -> View<'_> {
@@ -637,6 +789,7 @@ impl<'a> Block<'a> {
         }
         random_candidates(
             src,
+            Self::pool(src, self.guide.as_ref(), v),
             opts.seed,
             [key[0], key[1], v as u64],
             RANDOM_CANDIDATES,
@@ -645,6 +798,10 @@ impl<'a> Block<'a> {
         let xyz = self.grid.xyz(v);
         let blocks: [_; 3] = std::array::from_fn(|a| gather(&views[a], a, xyz, window));
         let m = opts.iterations as i64;
+        let mismatch = |c: u32| match (&src.classes, &self.guide) {
+            (Some((of, _)), Some(g)) if of[c as usize] != g.block[v] => g.penalty,
+            _ => 0,
+        };
         let mut best = (i64::MAX, candidates[0]);
         for &c in &candidates {
             // Copies of this coordinate beyond its even share, not counting
@@ -652,7 +809,8 @@ impl<'a> Block<'a> {
             let own = (self.coord[0][v] == c) as u32 as f64;
             let over =
                 (self.usage[c as usize] as f64 - own - self.share).max(0.0) / self.share.max(1.0);
-            let mut cost = (opts.occurrence * over * (MAX_PIXEL_COST * m) as f64) as i64;
+            let mut cost =
+                (opts.occurrence * over * (MAX_PIXEL_COST * m) as f64) as i64 + mismatch(c);
             let s = src.split(c);
             for (a, view) in views.iter().enumerate() {
                 let e = &src.ex[src.of_axis[a]];

@@ -16,6 +16,7 @@ pub mod place;
 pub mod profiles;
 pub mod residual;
 pub mod shape;
+pub mod slices;
 pub mod unfold;
 
 use std::time::Instant;
@@ -41,6 +42,48 @@ pub struct StereologyOptions {
     /// The particles' shape (sizes: the diameter of the disc as large as
     /// the largest central section).
     pub shape: shape::Shape,
+    /// How the particles and binder get the photographs' texture.
+    pub detail: Detail,
+}
+
+/// How the block gets the photographs' texture inside and around the
+/// particles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Detail {
+    /// The block synthesiser (FNPTS) copies the largest photograph's own
+    /// pixels, guided by the placed particles: particle voxels from
+    /// profile pixels, binder from binder (`synth::block::Guide`). Slices
+    /// then show the nuclei and stain of the photograph, where mean
+    /// colours plus a residual show flat discs; measured against the
+    /// photograph it wins (README, `tools/compare_block.py`).
+    #[default]
+    Copied,
+    /// Seed 001 (4.2-4.3): each particle a profile's mean colour, the
+    /// binder its mean, plus the residual resynthesised by Heeger-Bergen
+    /// pyramid matching.
+    Residual,
+}
+
+/// A class mismatch in the guided synthesis costs like every window pixel
+/// being as far off as the particles' mean colour is from the binder's
+/// (at least this many levels per channel): a neighbourhood copied across
+/// a particle's border can never pay for moving it, so particles stay
+/// where they were placed and as large (at a fixed 40 the copy grew
+/// high-contrast particles by a sixth of their area and bridged touching
+/// ones).
+const GUIDE_WEIGHT: f64 = 40.0;
+
+impl std::str::FromStr for Detail {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Detail, String> {
+        match s {
+            "copied" => Ok(Detail::Copied),
+            "residual" => Ok(Detail::Residual),
+            _ => Err(format!("the detail is copied or residual, not {s:?}")),
+        }
+    }
 }
 
 impl Default for StereologyOptions {
@@ -50,6 +93,7 @@ impl Default for StereologyOptions {
             bins: 10,
             seed: 0,
             shape: shape::Shape::Sphere,
+            detail: Detail::default(),
         }
     }
 }
@@ -98,7 +142,44 @@ pub struct Report {
     pub profiles: usize,
     pub particles: usize,
     pub overlap_fraction: f64,
+    /// The block's slices measured as the photographs were.
+    pub slices: slices::SliceCheck,
     pub seconds: Seconds,
+}
+
+/// The sections that photographs show (PNG or JPEG, the same pixel
+/// scale), `mask` (black where there is no tissue) applying to each.
+pub fn read_sections(
+    photographs: &[std::path::PathBuf],
+    mask: Option<&std::path::Path>,
+    seed: u64,
+) -> Result<Vec<Section>> {
+    use crate::synth::exemplar::read_image;
+    let mask = mask
+        .map(|m| read_image(m).map(|i| (m, i.to_luma8())))
+        .transpose()?;
+    photographs
+        .iter()
+        .map(|path| {
+            let img = read_image(path)?.to_rgb8();
+            let (w, h) = (img.width() as usize, img.height() as usize);
+            let valid: Vec<bool> = match &mask {
+                Some((at, m)) if (m.width() as usize, m.height() as usize) != (w, h) => {
+                    return Err(Error::invalid(format!(
+                        "the mask is {}x{} but the photograph {} is {w}x{h}",
+                        m.width(),
+                        m.height(),
+                        path.display()
+                    ))
+                    .in_file(at));
+                }
+                Some((_, m)) => m.pixels().map(|p| p.0[0] > 127).collect(),
+                None => vec![true; w * h],
+            };
+            let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+            profiles::find(w, h, &pixels, &valid, seed).map_err(|e| e.in_file(path))
+        })
+        .collect()
 }
 
 /// The block of the particles the sections show.
@@ -167,30 +248,37 @@ pub fn synthesize(
             p.colour.map(|c| c.round().clamp(0.0, 255.0) as u8)
         })
         .collect();
-    let (mut volume, inside) = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
+    let (mut volume, classes) = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
+    let inside = classes.iter().filter(|&&c| c != 0).count();
     let colour_s = start.elapsed().as_secs_f64();
     progress.advance(1);
     crate::progress::check(progress)?;
 
-    // Fine detail (sec. 4.3): the largest photograph's residual, in 3D,
-    // added to the mean colours.
+    // Fine detail from the largest photograph.
     let start = Instant::now();
     let largest = sections
         .iter()
         .max_by(|a, b| a.area.total_cmp(&b.area))
         .expect("a section");
-    let detail = residual::synthesize(&largest.residual, n, opts.seed);
-    let gain = largest.residual.gain;
-    volume
-        .voxels
-        .par_iter_mut()
-        .zip(&detail)
-        .for_each(|(c, &l)| {
-            for k in 0..3 {
-                c[k] = (c[k] as f64 + gain[k] * l as f64).round().clamp(0.0, 255.0) as u8;
-            }
-        });
+    match opts.detail {
+        Detail::Copied => volume = copied(largest, classes, opts)?,
+        Detail::Residual => {
+            // Sec. 4.3: the residual, in 3D, added to the mean colours.
+            let detail = residual::synthesize(&largest.residual, n, opts.seed);
+            let gain = largest.residual.gain;
+            volume
+                .voxels
+                .par_iter_mut()
+                .zip(&detail)
+                .for_each(|(c, &l)| {
+                    for k in 0..3 {
+                        c[k] = (c[k] as f64 + gain[k] * l as f64).round().clamp(0.0, 255.0) as u8;
+                    }
+                });
+        }
+    }
     let residual_s = start.elapsed().as_secs_f64();
+    let slices = slices::check(&volume, sections, opts.bins, opts.seed);
     progress.advance(1);
     Ok((
         volume,
@@ -202,6 +290,7 @@ pub fn synthesize(
             profiles: profiles.len(),
             particles: particles.len(),
             overlap_fraction: overlap,
+            slices,
             seconds: Seconds {
                 unfold: unfold_s,
                 place: place_s,
@@ -212,15 +301,65 @@ pub fn synthesize(
     ))
 }
 
+/// The block synthesiser's copy of `section`'s pixels into the particles
+/// and binder laid out by `classes` (0 binder, 1 particle).
+fn copied(section: &Section, classes: Vec<u8>, opts: &StereologyOptions) -> Result<Volume> {
+    let exemplar = crate::synth::exemplar::Exemplar::new(
+        section.width,
+        section.height,
+        section.pixels.clone(),
+        section.valid.clone(),
+    )?;
+    let exemplar_classes: Vec<u8> = section.labels.iter().map(|&l| (l != 0) as u8).collect();
+    // The classes' mean colours' difference, per channel.
+    let mut sum = [[0f64; 3]; 2];
+    let mut count = [0f64; 2];
+    for ((p, &c), &v) in section
+        .pixels
+        .iter()
+        .zip(&exemplar_classes)
+        .zip(&section.valid)
+    {
+        if v {
+            count[c as usize] += 1.0;
+            for k in 0..3 {
+                sum[c as usize][k] += p[k] as f64;
+            }
+        }
+    }
+    let contrast = (0..3)
+        .map(|k| (sum[0][k] / count[0].max(1.0) - sum[1][k] / count[1].max(1.0)).abs())
+        .sum::<f64>()
+        / 3.0;
+    let guide = crate::synth::block::Guide {
+        exemplar: exemplar_classes,
+        block: classes,
+        weight: contrast.max(GUIDE_WEIGHT),
+    };
+    // As many pyramid levels as the size halves into, down to 16 a side.
+    let (n, side) = (opts.size, section.width.min(section.height));
+    let mut levels = 1;
+    while n.is_multiple_of(1 << levels) && (n >> levels) >= 16 && (side >> levels) >= 16 {
+        levels += 1;
+    }
+    let block_opts = crate::synth::block::BlockOptions {
+        size: n,
+        seed: opts.seed,
+        levels: Some(levels),
+        ..Default::default()
+    };
+    crate::synth::block::synthesize_guided(&exemplar, &guide, &block_opts, &crate::progress::Silent)
+}
+
 /// The voxels: each inside a particle its colour (the later of two
-/// overlapping ones), the rest the binder's; the box wraps. Also the count
-/// of particle voxels.
+/// overlapping ones), the rest the binder's; the box wraps. Also each
+/// voxel's class: 0 binder, 1 particle.
 fn render(
     ps: &[place::Particle],
     colours: &[[u8; 3]],
     binder: [u8; 3],
     n: usize,
-) -> (Volume, usize) {
+) -> (Volume, Vec<u8>) {
     // Per z slab, in parallel: which particle covers each voxel (the
     // highest index wins, as if painted in order).
     let side = n as f64;
@@ -265,25 +404,24 @@ fn render(
             slab
         })
         .collect();
-    let mut inside = 0;
+    let owner: Vec<u32> = owner.into_iter().flatten().collect();
     let voxels = owner
         .iter()
-        .flatten()
         .map(|&k| {
             if k == u32::MAX {
                 binder
             } else {
-                inside += 1;
                 colours[k as usize]
             }
         })
         .collect();
+    let classes = owner.iter().map(|&k| (k != u32::MAX) as u8).collect();
     (
         Volume {
             size: [n; 3],
             spacing: 1.0,
             voxels,
         },
-        inside,
+        classes,
     )
 }

@@ -45,6 +45,9 @@ pub struct Section {
     /// The photograph less its profiles' and binder's mean colours (seed
     /// 001, 4.3), for the fine detail.
     pub residual: super::residual::Residual2d,
+    /// The photograph and its usable pixels, for the block synthesiser.
+    pub pixels: Vec<[u8; 3]>,
+    pub valid: Vec<bool>,
 }
 
 /// Find the profiles of `pixels` (row by row), `valid` the usable ones.
@@ -188,6 +191,8 @@ pub fn find(
         area_fraction: n_particle as f64 / usable.len() as f64,
         binder_colour,
         labels,
+        pixels: pixels.to_vec(),
+        valid: valid.to_vec(),
     })
 }
 

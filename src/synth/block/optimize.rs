@@ -99,6 +99,7 @@ impl Block<'_> {
         );
         random_candidates(
             src,
+            &src.buckets[0].usable,
             opts.seed,
             [key[0], key[1], (v * 3 + a) as u64],
             RANDOM_CANDIDATES,

@@ -167,7 +167,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "stereology 128",
-            what: "particles from database/sources/ihc.png: profiles, unfolding, placement, annealing, colour and the residual in 3D into a 128^3 block (target <= 20 s)",
+            what: "particles from database/sources/ihc.png: profiles, unfolding, placement, annealing, and the photograph copied into particles and binder by guided block synthesis, 128^3 (target <= 20 s)",
             prepare: |root| {
                 let img =
                     crate::synth::exemplar::read_image(&root.join("database/sources/ihc.png"))?

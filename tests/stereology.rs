@@ -54,7 +54,7 @@ fn truth() -> Distribution {
 fn sections_of_a_known_aggregate_unfold_and_rebuild_it() {
     let side = 256;
     let stats = stereology::shape::Shape::Sphere.stats(0);
-    let mut ps = place::draw(&truth(), side as f64, 0.2, &stats, 1);
+    let mut ps = place::draw(&truth(), side as f64, 0.2, &[(stats, 1.0)], 1);
     place::anneal(&mut ps, side as f64, 1);
     let true_fraction = ps
         .iter()

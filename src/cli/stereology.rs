@@ -22,10 +22,14 @@ pub struct Args {
     /// Particle-size bins reported.
     #[arg(long, default_value_t = 10)]
     bins: usize,
-    /// The particles' shape: sphere, or ellipsoid:A,B,C (semi-axes, any
-    /// scale), its unfolding kernel by Monte Carlo slicing.
-    #[arg(long, default_value = "sphere", value_parser = stereology::shape::Shape::parse)]
-    shape: stereology::shape::Shape,
+    /// A particle type: sphere, ellipsoid:A,B,C (semi-axes, any scale) or
+    /// a closed mesh (.obj, .ply, .stl; any scale), optionally @P, its
+    /// proportion. Repeat for several types sharing one size distribution
+    /// (seed 001, eq. 10-12), e.g. --shape sphere@3 --shape grain.obj@1.
+    /// Non-spheres unfold through a kernel by Monte Carlo slicing.
+    #[arg(long = "shape", value_name = "SHAPE[@P]", default_value = "sphere",
+          value_parser = stereology::shape::Shape::parse_type)]
+    shapes: Vec<(stereology::shape::Shape, f64)>,
     /// How particles and binder get the photographs' texture: copied (the
     /// block synthesiser copies the largest photograph's pixels, particle
     /// voxels from particle pixels) or residual (seed 001: mean colours
@@ -57,7 +61,7 @@ pub fn run(args: Args) -> Result<()> {
         size: args.size,
         bins: args.bins,
         seed: args.seed,
-        shape: args.shape,
+        shapes: args.shapes,
         detail: args.detail,
     };
     opts.check()?;
@@ -110,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
             report.seconds.unfold
                 + report.seconds.place
                 + report.seconds.colour
-                + report.seconds.residual,
+                + report.seconds.detail,
             n = args.size
         );
         let d = &report.size_distribution;

@@ -146,7 +146,7 @@ impl Section {
 }
 
 /// Shoelace signed area: positive counter-clockwise.
-fn signed_area(points: &[DVec2]) -> f64 {
+pub(crate) fn signed_area(points: &[DVec2]) -> f64 {
     let n = points.len();
     0.5 * (0..n)
         .map(|i| points[i].perp_dot(points[(i + 1) % n]))
@@ -154,7 +154,7 @@ fn signed_area(points: &[DVec2]) -> f64 {
 }
 
 /// Even-odd test: does `p` lie inside the closed polygon `points`?
-fn contains(points: &[DVec2], p: DVec2) -> bool {
+pub(crate) fn contains(points: &[DVec2], p: DVec2) -> bool {
     let mut inside = false;
     let mut j = points.len() - 1;
     for (i, &a) in points.iter().enumerate() {

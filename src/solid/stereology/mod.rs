@@ -12,6 +12,7 @@
 //!
 //! Sizes are in pixels of the photographs, and a voxel is a pixel.
 
+pub mod mesh_shape;
 pub mod place;
 pub mod profiles;
 pub mod residual;
@@ -39,9 +40,10 @@ pub struct StereologyOptions {
     /// classes each).
     pub bins: usize,
     pub seed: u64,
-    /// The particles' shape (sizes: the diameter of the disc as large as
-    /// the largest central section).
-    pub shape: shape::Shape,
+    /// The particle types, each a shape and its proportion (sizes: the
+    /// diameter of the disc as large as the largest section; several
+    /// types share one size distribution, seed 001 eq. 10-12).
+    pub shapes: Vec<(shape::Shape, f64)>,
     /// How the particles and binder get the photographs' texture.
     pub detail: Detail,
 }
@@ -92,15 +94,22 @@ impl Default for StereologyOptions {
             size: 64,
             bins: 10,
             seed: 0,
-            shape: shape::Shape::Sphere,
+            shapes: vec![(shape::Shape::Sphere, 1.0)],
             detail: Detail::default(),
         }
     }
 }
 
 impl StereologyOptions {
-    /// The size and bins in range.
+    /// The size, bins and particle types in range.
     pub fn check(&self) -> Result<()> {
+        if self.shapes.is_empty()
+            || self.shapes.iter().any(|s| !(s.1.is_finite() && s.1 > 0.0))
+        {
+            return Err(Error::invalid(
+                "give at least one particle shape, each with a positive proportion",
+            ));
+        }
         let n = self.size;
         if !(8..=crate::synth::block::MAX_BLOCK).contains(&n) {
             return Err(Error::invalid(format!(
@@ -124,7 +133,7 @@ pub struct Seconds {
     pub unfold: f64,
     pub place: f64,
     pub colour: f64,
-    pub residual: f64,
+    pub detail: f64,
 }
 
 /// What the synthesis found and made (`organtex stereology --json`).
@@ -204,10 +213,28 @@ pub fn synthesize(
         / area;
     let sizes: Vec<(f64, f64)> = profiles.iter().map(|p| (p.diameter, p.weight)).collect();
     let d_max = sizes.iter().map(|s| s.0).fold(0.0, f64::max);
-    let stats = opts.shape.stats(opts.seed);
-    let kernel = |s: &[f64], e: &[f64]| match opts.shape {
-        shape::Shape::Sphere => unfold::sphere_kernel(s, e),
-        shape::Shape::Ellipsoid(_) => stats.kernel(s, e),
+    let types: Vec<(shape::ShapeStats, f64)> = opts
+        .shapes
+        .iter()
+        .map(|(s, p)| (s.stats(opts.seed), *p))
+        .collect();
+    let total: f64 = types.iter().map(|t| t.1).sum();
+    // Eq. 11: the types' kernels (each scaled by its caliper) weighted by
+    // their proportions.
+    let kernel = |s: &[f64], e: &[f64]| {
+        let parts: Vec<(unfold::Kernel, f64)> = opts
+            .shapes
+            .iter()
+            .zip(&types)
+            .map(|((shape, p), (stats, _))| {
+                let k = match shape {
+                    shape::Shape::Sphere => unfold::sphere_kernel(s, e),
+                    _ => stats.kernel(s, e),
+                };
+                (k, p / total)
+            })
+            .collect();
+        unfold::Kernel::mix(&parts)
     };
     let dist = unfold::unfold(&sizes, area, opts.bins, d_max, &kernel);
     let seed001 = unfold::saltikov(&unfold::profile_density(&sizes, &dist.edges, area), d_max);
@@ -222,7 +249,7 @@ pub fn synthesize(
 
     let start = Instant::now();
     let side = n as f64;
-    let mut particles = place::draw(&dist, side, fraction, &stats, opts.seed);
+    let mut particles = place::draw(&dist, side, fraction, &types, opts.seed);
     if particles.is_empty() {
         return Err(Error::invalid(format!(
             "a {n}-voxel block holds none of these particles (largest {d_max:.1} pixels across, \
@@ -277,7 +304,7 @@ pub fn synthesize(
                 });
         }
     }
-    let residual_s = start.elapsed().as_secs_f64();
+    let detail_s = start.elapsed().as_secs_f64();
     let slices = slices::check(&volume, sections, opts.bins, opts.seed);
     progress.advance(1);
     Ok((
@@ -295,7 +322,7 @@ pub fn synthesize(
                 unfold: unfold_s,
                 place: place_s,
                 colour: colour_s,
-                residual: residual_s,
+                detail: detail_s,
             },
         },
     ))

@@ -24,8 +24,11 @@ pub struct Particle {
     /// Of the sphere of the particle's volume (what annealing separates).
     pub radius: f64,
     /// A non-spherical particle: world offsets to its unit-ball
-    /// coordinates, and its largest semi-axis.
+    /// coordinates (a mesh's: to its frame at size 1), and how far it
+    /// reaches.
     pub ellipsoid: Option<(glam::DMat3, f64)>,
+    /// A mesh particle's inside.
+    pub inside: Option<std::sync::Arc<super::mesh_shape::Inside>>,
 }
 
 impl Particle {
@@ -36,30 +39,32 @@ impl Particle {
 
     /// Whether the offset `d` from its centre is inside.
     pub fn contains(&self, d: DVec3) -> bool {
-        match &self.ellipsoid {
-            None => d.length_squared() < self.radius * self.radius,
-            Some((to_unit, _)) => (*to_unit * d).length_squared() < 1.0,
+        match (&self.ellipsoid, &self.inside) {
+            (None, _) => d.length_squared() < self.radius * self.radius,
+            (Some((to_unit, _)), None) => (*to_unit * d).length_squared() < 1.0,
+            (Some((to_frame, _)), Some(inside)) => inside.contains(*to_frame * d),
         }
     }
 }
 
-/// Particles of `dist`'s sizes in a periodic box of side `side`, of the
-/// shape `stats` describes, scaled so their volume is `fraction` of the
+/// Particles of `dist`'s sizes in a periodic box of side `side`, each of
+/// one of the shape `types` with its proportion (seed 001, eq. 10: type
+/// and size uncorrelated), scaled so their volume is `fraction` of the
 /// box; each bin's sizes uniform within it, each non-spherical particle
 /// turned at random (Shoemake's uniform rotation).
 pub fn draw(
     dist: &Distribution,
     side: f64,
     fraction: f64,
-    stats: &super::shape::ShapeStats,
+    types: &[(super::shape::ShapeStats, f64)],
     seed: u64,
 ) -> Vec<Particle> {
     let box_volume = side.powi(3);
-    let natural = dist.volume_fraction(stats.volume);
-    // Equal semi-axes: a sphere, drawn without an orientation.
-    let sphere = stats.axes[0] == stats.axes[2];
-    // The radius of the sphere of the same volume, per unit size.
-    let equal = (stats.volume * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
+    let total: f64 = types.iter().map(|t| t.1).sum();
+    let natural: f64 = types
+        .iter()
+        .map(|(stats, p)| p / total * dist.volume_fraction(stats.volume))
+        .sum();
     let scale = if natural > 0.0 {
         fraction / natural
     } else {
@@ -74,6 +79,19 @@ pub fn draw(
         for k in 0..count {
             let u = |c: u64| rng::unit(seed, &[b as u64, k as u64, c]);
             let d = e[0] + (e[1] - e[0]) * u(0);
+            let mut pick = u(7) * total;
+            let stats = &types
+                .iter()
+                .find(|t| {
+                    pick -= t.1;
+                    pick < 0.0
+                })
+                .unwrap_or(&types[types.len() - 1])
+                .0;
+            // Equal semi-axes: a sphere, drawn without an orientation.
+            let sphere = stats.axes[0] == stats.axes[2] && stats.inside.is_none();
+            // The radius of the sphere of the same volume, per unit size.
+            let equal = (stats.volume * 3.0 / (4.0 * std::f64::consts::PI)).cbrt();
             let ellipsoid = (!sphere).then(|| {
                 let (u1, u2, u3) = (
                     u(4),
@@ -84,9 +102,14 @@ pub fn draw(
                 let turn =
                     glam::DQuat::from_xyzw(a * u2.sin(), a * u2.cos(), b * u3.sin(), b * u3.cos());
                 let axes = DVec3::from_array(stats.axes) * d;
+                // An ellipsoid's offsets go to the unit ball, a mesh's to
+                // its frame at size 1.
+                let to_frame = match stats.inside {
+                    None => axes.recip(),
+                    Some(_) => DVec3::splat(1.0 / d),
+                };
                 (
-                    glam::DMat3::from_diagonal(axes.recip())
-                        * glam::DMat3::from_quat(turn).transpose(),
+                    glam::DMat3::from_diagonal(to_frame) * glam::DMat3::from_quat(turn).transpose(),
                     axes.max_element(),
                 )
             });
@@ -94,6 +117,7 @@ pub fn draw(
                 centre: DVec3::new(u(1), u(2), u(3)) * side,
                 radius: equal * d,
                 ellipsoid,
+                inside: stats.inside.clone(),
             });
         }
     }
@@ -290,7 +314,7 @@ mod tests {
             per_volume: vec![1.0, 1.0, 0.5],
         };
         let stats = super::super::shape::Shape::Sphere.stats(0);
-        let mut ps = draw(&dist, 64.0, 0.3, &stats, 5);
+        let mut ps = draw(&dist, 64.0, 0.3, &[(stats, 1.0)], 5);
         assert!(ps.len() > 100, "{}", ps.len());
         let before = overlap_fraction(&ps, 64.0);
         let after = anneal(&mut ps, 64.0, 5);

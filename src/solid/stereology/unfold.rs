@@ -42,6 +42,25 @@ pub struct Kernel {
     pub columns: Vec<Vec<f64>>,
 }
 
+impl Kernel {
+    /// Several particle types' kernels on the same classes and bins,
+    /// weighted by the types' proportions (seed 001, eq. 11).
+    pub fn mix(parts: &[(Kernel, f64)]) -> Kernel {
+        let (first, _) = &parts[0];
+        let columns = (0..first.columns.len())
+            .map(|j| {
+                (0..first.columns[j].len())
+                    .map(|i| parts.iter().map(|(k, p)| p * k.columns[j][i]).sum())
+                    .collect()
+            })
+            .collect();
+        Kernel {
+            sizes: first.sizes.clone(),
+            columns,
+        }
+    }
+}
+
 /// Spheres of diameters `sizes`, profiles binned by diameter at `edges`
 /// (closed form: a plane at uniform height through a sphere of diameter D
 /// leaves a disc of diameter at most x with probability

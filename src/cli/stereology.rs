@@ -36,6 +36,11 @@ pub struct Args {
     /// plus the residual resynthesised by pyramid histogram matching).
     #[arg(long, default_value = "copied")]
     detail: stereology::Detail,
+    /// Colour categories of particles (seed 001, 4.2): k-means of the
+    /// profiles' mean colours, each category unfolded on its own; more
+    /// than 1 where particles of different sizes differ in colour.
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    colour_classes: usize,
     /// Voxels a side (a voxel is a pixel of the photographs).
     #[arg(long, value_name = "N")]
     size: usize,
@@ -63,6 +68,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         shapes: args.shapes,
         detail: args.detail,
+        colour_classes: args.colour_classes,
     };
     opts.check()?;
     let sections = stereology::read_sections(&args.photos, args.mask.as_deref(), args.seed)?;

@@ -106,7 +106,7 @@ impl MeshShape {
             .iter()
             .map(|p| p.length())
             .fold(0.0, f64::max);
-        if !(volume.abs() > 1e-9 * scale.powi(3)) {
+        if volume.is_nan() || volume.abs() <= 1e-9 * scale.powi(3) {
             return Err(Error::invalid("the particle mesh encloses no volume"));
         }
         if volume < 0.0 {
@@ -387,12 +387,24 @@ mod tests {
     fn slices_of_a_torus_and_a_sphere_give_their_volumes() {
         let ring = MeshShape::new(&torus(2.0, 0.7, 96, 48), "torus").unwrap();
         let exact = 2.0 * std::f64::consts::PI.powi(2) * 2.0 * 0.7 * 0.7;
-        assert!((ring.volume() / exact - 1.0).abs() < 0.01, "{}", ring.volume());
+        assert!(
+            (ring.volume() / exact - 1.0).abs() < 0.01,
+            "{}",
+            ring.volume()
+        );
         let v = cavalieri(&ring);
-        assert!((v / ring.volume() - 1.0).abs() < 0.005, "{v} vs {}", ring.volume());
+        assert!(
+            (v / ring.volume() - 1.0).abs() < 0.005,
+            "{v} vs {}",
+            ring.volume()
+        );
         let ball = MeshShape::new(&icosphere(3), "ball").unwrap();
         let v = cavalieri(&ball);
-        assert!((v / ball.volume() - 1.0).abs() < 0.005, "{v} vs {}", ball.volume());
+        assert!(
+            (v / ball.volume() - 1.0).abs() < 0.005,
+            "{v} vs {}",
+            ball.volume()
+        );
     }
 
     #[test]
@@ -420,12 +432,19 @@ mod tests {
             })
             .count();
         let fraction = count as f64 / (n * n * n) as f64;
-        assert!((fraction / stats.volume - 1.0).abs() < 0.05, "{fraction} vs {}", stats.volume);
+        assert!(
+            (fraction / stats.volume - 1.0).abs() < 0.05,
+            "{fraction} vs {}",
+            stats.volume
+        );
     }
 
     #[test]
     fn an_open_mesh_is_refused() {
         let err = MeshShape::new(&open_cylinder(1.0, 2.0, 16, 4), "tube").unwrap_err();
-        assert!(err.to_string().contains("not closed (2 boundary loops)"), "{err}");
+        assert!(
+            err.to_string().contains("not closed (2 boundary loops)"),
+            "{err}"
+        );
     }
 }

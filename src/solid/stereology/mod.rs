@@ -12,6 +12,7 @@
 //!
 //! Sizes are in pixels of the photographs, and a voxel is a pixel.
 
+pub mod colour;
 pub mod mesh_shape;
 pub mod place;
 pub mod profiles;
@@ -19,6 +20,7 @@ pub mod residual;
 pub mod shape;
 pub mod slices;
 pub mod unfold;
+pub mod watershed;
 
 use std::time::Instant;
 
@@ -46,6 +48,9 @@ pub struct StereologyOptions {
     pub shapes: Vec<(shape::Shape, f64)>,
     /// How the particles and binder get the photographs' texture.
     pub detail: Detail,
+    /// Colour categories of particles (seed 001, 4.2), each unfolded on
+    /// its own: 1 where colour and size are unrelated.
+    pub colour_classes: usize,
 }
 
 /// How the block gets the photographs' texture inside and around the
@@ -96,6 +101,7 @@ impl Default for StereologyOptions {
             seed: 0,
             shapes: vec![(shape::Shape::Sphere, 1.0)],
             detail: Detail::default(),
+            colour_classes: 1,
         }
     }
 }
@@ -103,9 +109,7 @@ impl Default for StereologyOptions {
 impl StereologyOptions {
     /// The size, bins and particle types in range.
     pub fn check(&self) -> Result<()> {
-        if self.shapes.is_empty()
-            || self.shapes.iter().any(|s| !(s.1.is_finite() && s.1 > 0.0))
-        {
+        if self.shapes.is_empty() || self.shapes.iter().any(|s| !(s.1.is_finite() && s.1 > 0.0)) {
             return Err(Error::invalid(
                 "give at least one particle shape, each with a positive proportion",
             ));
@@ -115,6 +119,12 @@ impl StereologyOptions {
             return Err(Error::invalid(format!(
                 "the block size must be from 8 to {} voxels, not {n}",
                 crate::synth::block::MAX_BLOCK
+            )));
+        }
+        if !(1..=8).contains(&self.colour_classes) {
+            return Err(Error::invalid(format!(
+                "the colour classes must be from 1 to 8, not {}",
+                self.colour_classes
             )));
         }
         if !(2..=64).contains(&self.bins) {
@@ -151,6 +161,8 @@ pub struct Report {
     pub profiles: usize,
     pub particles: usize,
     pub overlap_fraction: f64,
+    /// The particles' colour categories (one unless asked for more).
+    pub colour_classes: Vec<ColourClass>,
     /// The block's slices measured as the photographs were.
     pub slices: slices::SliceCheck,
     pub seconds: Seconds,
@@ -189,6 +201,19 @@ pub fn read_sections(
             profiles::find(w, h, &pixels, &valid, seed).map_err(|e| e.in_file(path))
         })
         .collect()
+}
+
+/// A colour category of particles.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ColourClass {
+    /// Mean of its profiles' mean colours.
+    pub colour: [f64; 3],
+    pub profiles: usize,
+    /// Its share of the volume (of the profiles' area, Delesse).
+    pub volume_fraction: f64,
+    pub particles: usize,
+    /// Its own unfolded sizes (bins up to its largest profile).
+    pub size_distribution: Distribution,
 }
 
 /// The block of the particles the sections show.
@@ -236,7 +261,52 @@ pub fn synthesize(
             .collect();
         unfold::Kernel::mix(&parts)
     };
-    let dist = unfold::unfold(&sizes, area, opts.bins, d_max, &kernel);
+    // Each colour category unfolded on its own (sec. 4.2), on the same
+    // bins; its volume fraction its share of the profiles' area.
+    let category = colour::categories(
+        &profiles.iter().map(|p| p.colour).collect::<Vec<_>>(),
+        opts.colour_classes,
+    );
+    let categories = category.iter().max().map_or(1, |m| m + 1);
+    let weighted = |c: usize| -> f64 {
+        profiles
+            .iter()
+            .zip(&category)
+            .filter(|(_, k)| **k == c)
+            .map(|(p, _)| p.area * p.weight)
+            .sum()
+    };
+    let all: f64 = (0..categories).map(weighted).sum();
+    let unfolded: Vec<(Distribution, f64)> = (0..categories)
+        .map(|c| {
+            let sizes: Vec<(f64, f64)> = sizes
+                .iter()
+                .zip(&category)
+                .filter(|(_, k)| **k == c)
+                .map(|(s, _)| *s)
+                .collect();
+            // Up to the category's own largest profile: small particles'
+            // profiles would otherwise lend some of their volume to sizes
+            // only another category has.
+            let top = sizes.iter().map(|s| s.0).fold(0.0, f64::max);
+            let dist = unfold::unfold(&sizes, area, opts.bins, top, &kernel);
+            (dist, fraction * weighted(c) / all)
+        })
+        .collect();
+    let edges: Vec<f64> = (0..=opts.bins)
+        .map(|i| d_max * i as f64 / opts.bins as f64)
+        .collect();
+    let dist = if categories == 1 {
+        unfolded[0].0.clone()
+    } else {
+        let rebinned: Vec<Distribution> = unfolded.iter().map(|(d, _)| d.rebin(&edges)).collect();
+        Distribution {
+            edges,
+            per_volume: (0..opts.bins)
+                .map(|i| rebinned.iter().map(|d| d.per_volume[i]).sum())
+                .collect(),
+        }
+    };
     let seed001 = unfold::saltikov(&unfold::profile_density(&sizes, &dist.edges, area), d_max);
     if !dist.per_volume.iter().any(|&x| x > 0.0) {
         return Err(Error::invalid(
@@ -249,7 +319,18 @@ pub fn synthesize(
 
     let start = Instant::now();
     let side = n as f64;
-    let mut particles = place::draw(&dist, side, fraction, &types, opts.seed);
+    let mut particles = Vec::new();
+    let mut particle_category = Vec::new();
+    for (c, (dist, fraction)) in unfolded.iter().enumerate() {
+        let seed = if categories == 1 {
+            opts.seed
+        } else {
+            rng::hash(opts.seed, &[c as u64])
+        };
+        let drawn = place::draw(dist, side, *fraction, &types, seed);
+        particle_category.extend(std::iter::repeat_n(c, drawn.len()));
+        particles.extend(drawn);
+    }
     if particles.is_empty() {
         return Err(Error::invalid(format!(
             "a {n}-voxel block holds none of these particles (largest {d_max:.1} pixels across, \
@@ -262,20 +343,51 @@ pub fn synthesize(
     crate::progress::check(progress)?;
 
     let start = Instant::now();
-    // Colour (sec. 4.2): each particle a random profile's mean colour, the
-    // binder the mean of the binder pixels.
+    // Colour (sec. 4.2): each particle the mean colour of a random profile
+    // of its category, the binder the mean of the binder pixels.
     let binder = sections
         .iter()
         .map(|s| s.binder_colour.map(|c| c * s.area))
         .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
         .map(|c| c / area);
-    let colours: Vec<[u8; 3]> = (0..particles.len())
-        .map(|k| {
-            let p = profiles[rng::below(opts.seed, &[k as u64, 7], profiles.len())];
+    let members: Vec<Vec<&Profile>> = (0..categories)
+        .map(|c| {
+            profiles
+                .iter()
+                .zip(&category)
+                .filter(|(_, k)| **k == c)
+                .map(|(p, _)| *p)
+                .collect()
+        })
+        .collect();
+    let colours: Vec<[u8; 3]> = particle_category
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let m = &members[c];
+            let p = m[rng::below(opts.seed, &[k as u64, 7], m.len())];
             p.colour.map(|c| c.round().clamp(0.0, 255.0) as u8)
         })
         .collect();
-    let (mut volume, classes) = render(&particles, &colours, binder.map(|c| c.round() as u8), n);
+    let colour_classes: Vec<ColourClass> = members
+        .iter()
+        .zip(&unfolded)
+        .enumerate()
+        .map(|(c, (m, (dist, fraction)))| ColourClass {
+            colour: [0, 1, 2].map(|i| m.iter().map(|p| p.colour[i]).sum::<f64>() / m.len() as f64),
+            profiles: m.len(),
+            volume_fraction: *fraction,
+            particles: particle_category.iter().filter(|&&k| k == c).count(),
+            size_distribution: dist.clone(),
+        })
+        .collect();
+    let (mut volume, classes) = render(
+        &particles,
+        &particle_category,
+        &colours,
+        binder.map(|c| c.round() as u8),
+        n,
+    );
     let inside = classes.iter().filter(|&&c| c != 0).count();
     let colour_s = start.elapsed().as_secs_f64();
     progress.advance(1);
@@ -283,12 +395,30 @@ pub fn synthesize(
 
     // Fine detail from the largest photograph.
     let start = Instant::now();
-    let largest = sections
+    let (index, largest) = sections
         .iter()
-        .max_by(|a, b| a.area.total_cmp(&b.area))
+        .enumerate()
+        .max_by(|a, b| a.1.area.total_cmp(&b.1.area))
         .expect("a section");
     match opts.detail {
-        Detail::Copied => volume = copied(largest, classes, opts)?,
+        Detail::Copied => {
+            // The photograph's pixels' classes: 0 binder, 1 + the
+            // category of the profile they belong to (of the nearest
+            // category's colour for a profile cut by the border).
+            let first: usize = sections[..index].iter().map(|s| s.profiles.len()).sum();
+            let means: Vec<[f64; 3]> = colour_classes.iter().map(|c| c.colour).collect();
+            let pixel_classes: Vec<u8> = largest
+                .labels
+                .iter()
+                .zip(&largest.pixels)
+                .map(|(&l, &p)| match l {
+                    0 => 0,
+                    u32::MAX => 1 + colour::nearest(&means, p) as u8,
+                    k => 1 + category[first + k as usize - 1] as u8,
+                })
+                .collect();
+            volume = copied(largest, pixel_classes, classes, opts)?
+        }
         Detail::Residual => {
             // Sec. 4.3: the residual, in 3D, added to the mean colours.
             let detail = residual::synthesize(&largest.residual, n, opts.seed);
@@ -317,6 +447,7 @@ pub fn synthesize(
             profiles: profiles.len(),
             particles: particles.len(),
             overlap_fraction: overlap,
+            colour_classes,
             slices,
             seconds: Seconds {
                 unfold: unfold_s,
@@ -328,29 +459,36 @@ pub fn synthesize(
     ))
 }
 
-/// The block synthesiser's copy of `section`'s pixels into the particles
-/// and binder laid out by `classes` (0 binder, 1 particle).
-fn copied(section: &Section, classes: Vec<u8>, opts: &StereologyOptions) -> Result<Volume> {
+/// The block synthesiser's copy of `section`'s pixels (of classes
+/// `pixel_classes`) into the particles and binder laid out by `classes`
+/// (0 binder, 1 + a particle's colour category).
+fn copied(
+    section: &Section,
+    pixel_classes: Vec<u8>,
+    classes: Vec<u8>,
+    opts: &StereologyOptions,
+) -> Result<Volume> {
     let exemplar = crate::synth::exemplar::Exemplar::new(
         section.width,
         section.height,
         section.pixels.clone(),
         section.valid.clone(),
     )?;
-    let exemplar_classes: Vec<u8> = section.labels.iter().map(|&l| (l != 0) as u8).collect();
-    // The classes' mean colours' difference, per channel.
+    // Binder against particles: their mean colours' difference, per
+    // channel.
     let mut sum = [[0f64; 3]; 2];
     let mut count = [0f64; 2];
     for ((p, &c), &v) in section
         .pixels
         .iter()
-        .zip(&exemplar_classes)
+        .zip(&pixel_classes)
         .zip(&section.valid)
     {
         if v {
-            count[c as usize] += 1.0;
+            let c = (c != 0) as usize;
+            count[c] += 1.0;
             for k in 0..3 {
-                sum[c as usize][k] += p[k] as f64;
+                sum[c][k] += p[k] as f64;
             }
         }
     }
@@ -359,7 +497,7 @@ fn copied(section: &Section, classes: Vec<u8>, opts: &StereologyOptions) -> Resu
         .sum::<f64>()
         / 3.0;
     let guide = crate::synth::block::Guide {
-        exemplar: exemplar_classes,
+        exemplar: pixel_classes,
         block: classes,
         weight: contrast.max(GUIDE_WEIGHT),
     };
@@ -380,9 +518,10 @@ fn copied(section: &Section, classes: Vec<u8>, opts: &StereologyOptions) -> Resu
 
 /// The voxels: each inside a particle its colour (the later of two
 /// overlapping ones), the rest the binder's; the box wraps. Also each
-/// voxel's class: 0 binder, 1 particle.
+/// voxel's class: 0 binder, 1 + the particle's category.
 fn render(
     ps: &[place::Particle],
+    category: &[usize],
     colours: &[[u8; 3]],
     binder: [u8; 3],
     n: usize,
@@ -442,7 +581,16 @@ fn render(
             }
         })
         .collect();
-    let classes = owner.iter().map(|&k| (k != u32::MAX) as u8).collect();
+    let classes = owner
+        .iter()
+        .map(|&k| {
+            if k == u32::MAX {
+                0
+            } else {
+                1 + category[k as usize] as u8
+            }
+        })
+        .collect();
     (
         Volume {
             size: [n; 3],

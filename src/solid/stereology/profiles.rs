@@ -2,7 +2,8 @@
 //! pixels split into two colour classes by k-means, the minority class
 //! taken as particles (the binder is the continuous phase), its
 //! 4-connected components the profiles, with the binder regions each one
-//! encloses (a gland's lumen inside its epithelium) filled in. A profile touching the image's
+//! encloses (a gland's lumen inside its epithelium) filled in, and those
+//! of touching particles split at their necks (`watershed`). A profile touching the image's
 //! border or the mask is cut by the frame, so it is left out and the
 //! others weighted for it (Miles-Lantuejoul: a profile of bounding box
 //! w x h is wholly seen only when its box falls inside the frame, a chance
@@ -71,7 +72,7 @@ pub fn find(
     // Particle components, then binder components: a binder region that
     // one particle component encloses (a gland's lumen inside its
     // epithelium) is part of that particle.
-    let (mut comp, touches) = components(width, height, valid, &|i| particle[i]);
+    let (mut comp, _) = components(width, height, valid, &|i| particle[i]);
     let (binder, binder_touches) = components(width, height, valid, &|i| !particle[i]);
     let mut enclosing = vec![None; binder_touches.len()];
     let mut shared = vec![false; binder_touches.len()];
@@ -101,6 +102,8 @@ pub fn find(
         }
     }
     let is_particle: Vec<bool> = comp.iter().map(|&c| c != 0).collect();
+    // Touching particles' profiles split at their necks.
+    let (comp, touches) = super::watershed::split(width, height, valid, &is_particle);
     // Per component: pixels, colour, bounding box.
     let count = touches.len();
     let mut area = vec![0usize; count];

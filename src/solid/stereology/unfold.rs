@@ -108,6 +108,28 @@ impl Distribution {
 
     /// Volume of the particles per unit volume, for spheres (each bin's
     /// particles at its centre size).
+    /// The same particles counted in the bins `edges` (uniform within
+    /// each of their own bins).
+    pub fn rebin(&self, edges: &[f64]) -> Distribution {
+        let per_volume = edges
+            .windows(2)
+            .map(|t| {
+                self.edges
+                    .windows(2)
+                    .zip(&self.per_volume)
+                    .map(|(e, n)| {
+                        let overlap = (t[1].min(e[1]) - t[0].max(e[0])).max(0.0);
+                        n * overlap / (e[1] - e[0]).max(f64::MIN_POSITIVE)
+                    })
+                    .sum()
+            })
+            .collect();
+        Distribution {
+            edges: edges.to_vec(),
+            per_volume,
+        }
+    }
+
     pub fn sphere_volume_fraction(&self) -> f64 {
         self.volume_fraction(std::f64::consts::PI / 6.0)
     }

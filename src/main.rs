@@ -9,6 +9,15 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     quiet_headless_vulkan();
+    // A closed pipe (`organtex bake ... | head -1`) ends the program
+    // quietly, as it does other command-line tools, instead of a panic in
+    // the next print (Rust ignores SIGPIPE by default).
+    #[cfg(unix)]
+    // SAFETY: restores the default action of one signal before any thread
+    // starts; no handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let args = cli::Cli::parse();
     cli::progress::catch_interrupts();
     match cli::run(args) {

@@ -72,4 +72,14 @@ python3 tools/check_bakes.py --organtex target/release/organtex
 step "tools/compare_tet.py --quick (organtex tetra vs TetGen and fTetWild, files read by meshio)"
 python3 tools/compare_tet.py --quick --organtex target/release/organtex
 
+step "Python package (maturin develop into target/pyorgantex) and pytest: the API, batch bakes on a local two-node Ray cluster"
+venv="$PWD/target/pyorgantex"
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/python" -c 'import pytest, numpy, PIL, ray, tqdm' 2>/dev/null; then
+    "$venv/bin/pip" install -q maturin pytest numpy pillow ray tqdm
+fi
+(cd python && VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --release -q)
+PYO3_PYTHON="$venv/bin/python" cargo clippy --release -p organtex-python -- -D warnings
+"$venv/bin/python" -m pytest -q python/tests
+
 step "all checks passed"

@@ -1,4 +1,5 @@
-//! `organtex bake SCENE -o DIR [--atlas SIZE]`.
+//! `organtex bake SCENE -o DIR [--atlas SIZE]`, or `organtex bake
+//! --manifest LIST --index N -o DIR` (the N-th scene into DIR/NAME/).
 
 use std::path::PathBuf;
 
@@ -10,7 +11,17 @@ use super::progress::Bars;
 #[derive(clap::Args)]
 pub struct Args {
     /// Scene file (.toml; format in scenes/README.md).
-    scene: PathBuf,
+    #[arg(required_unless_present = "manifest", conflicts_with = "manifest")]
+    scene: Option<PathBuf>,
+    /// A list of scenes, one path per line (relative to the list; blank
+    /// and # lines skipped), for job arrays: with --index N, bake the N-th
+    /// (from 0) into DIR/NAME/, NAME its file name without .toml, e.g.
+    /// `--index $SLURM_ARRAY_TASK_ID` or `$JOB_COMPLETION_INDEX`.
+    #[arg(long, value_name = "LIST", requires = "index")]
+    manifest: Option<PathBuf>,
+    /// Which scene of --manifest to bake (from 0).
+    #[arg(long, value_name = "N", requires = "manifest")]
+    index: Option<usize>,
     /// Folder for scene.glb, report.json and preview.png (created if
     /// missing; files already there are replaced only when the bake
     /// succeeds).
@@ -36,7 +47,14 @@ pub fn run(args: Args) -> Result<()> {
             organtex::memory::product(&[side, side, 14]),
         )?;
     }
-    bake_and_print(&args.scene, &args.output, args.atlas.map(|s| s as usize))
+    let (scene, output) = match (&args.scene, &args.manifest, args.index) {
+        (Some(scene), _, _) => (scene.clone(), args.output.clone()),
+        (None, Some(list), Some(index)) => {
+            organtex::scene::manifest::entry(list, index, &args.output)?
+        }
+        _ => unreachable!("clap requires a scene or --manifest with --index"),
+    };
+    bake_and_print(&scene, &output, args.atlas.map(|s| s as usize))
 }
 
 pub fn bake_and_print(

@@ -9,4 +9,5 @@ pub mod contrast;
 pub mod draw;
 pub mod file;
 pub mod gltf;
+pub mod manifest;
 pub mod uterus;

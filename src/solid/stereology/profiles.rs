@@ -201,7 +201,7 @@ pub fn find(
 
 /// Pixel `i`'s left, right, upper and lower neighbours, where the image
 /// has them.
-fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
+pub(super) fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
     let (x, y) = (i % width, i / width);
     [
         (x > 0).then(|| i - 1),

@@ -8,6 +8,7 @@
 //! the smaller particle's inscribed radius, so the bumps of one irregular
 //! profile stay together.
 
+use super::profiles::four_neighbours;
 use crate::mesh::dsu::DisjointSets;
 
 /// A saddle at under this fraction of the lower peak splits two basins.
@@ -35,14 +36,8 @@ pub fn split(
     let mut sets = DisjointSets::new(n);
     let mut roots = Vec::with_capacity(8);
     for &i in &order {
-        let (x, y) = ((i % width) as i64, (i / width) as i64);
         roots.clear();
-        for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-            let (nx, ny) = (x + dx, y + dy);
-            if nx < 0 || ny < 0 || nx >= width as i64 || ny >= height as i64 {
-                continue;
-            }
-            let j = ny as usize * width + nx as usize;
+        for j in four_neighbours(i, width, height).into_iter().flatten() {
             if basin[j] != u32::MAX {
                 let r = sets.find(basin[j] as usize) as u32;
                 if !roots.contains(&r) {
@@ -92,15 +87,10 @@ pub fn split(
         }
         let (x, y) = (i % width, i / width);
         let edge = x == 0 || y == 0 || x + 1 == width || y + 1 == height;
-        let masked = [
-            (x > 0).then(|| i - 1),
-            (x + 1 < width).then(|| i + 1),
-            (y > 0).then(|| i - width),
-            (y + 1 < height).then(|| i + width),
-        ]
-        .into_iter()
-        .flatten()
-        .any(|j| !valid[j]);
+        let masked = four_neighbours(i, width, height)
+            .into_iter()
+            .flatten()
+            .any(|j| !valid[j]);
         if edge || masked {
             touches[label[i] as usize - 1] = true;
         }

@@ -34,6 +34,7 @@ import json
 import os
 import random
 import re
+import shutil
 import socket
 import sys
 import time
@@ -97,17 +98,37 @@ def bake_one(scene: str, out_root: str, atlas, force: bool) -> dict:
     # test that kills a worker mid-bake).
     running = Path(out_root) / f".{name}.running"
     running.write_text(f"{socket.gethostname()} {os.getpid()}\n")
+    # The bake goes to a staging folder that replaces DIR/NAME whole once
+    # it succeeds: a worker killed mid-bake leaves the previous bake (or
+    # none) and a staging folder the retry clears.
+    staging = Path(out_root) / f".{name}.staging"
+    shutil.rmtree(staging, ignore_errors=True)
     start = time.monotonic()
     try:
-        report = bake(scene_path, out, atlas=atlas)
+        report = bake(scene_path, staging, atlas=atlas)
+        _replace(staging, out)
     except OrgantexError as e:
         # The scene is wrong, not the worker: no retry would help.
+        shutil.rmtree(staging, ignore_errors=True)
         return {**result, "status": "failed", "error": str(e),
                 "seconds": time.monotonic() - start}
     finally:
         running.unlink(missing_ok=True)
     return {**result, "status": "ok", "seconds": time.monotonic() - start,
             "figures": figures(report)}
+
+
+def _replace(staging: Path, out: Path) -> None:
+    """Put the folder ``staging`` in the place of ``out`` (two renames; the
+    old bake is removed after)."""
+    if out.exists():
+        old = out.parent / f".{out.name}.old"
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(out, old)
+        os.replace(staging, out)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(staging, out)
 
 
 def _node_id():

@@ -88,3 +88,7 @@ def test_a_worker_killed_mid_bake_is_retried_and_the_batch_completes(cluster, ro
     assert killed, "the bake never started"
     assert summary["ok"] == 1, summary
     assert (out / "hysteroscopy_myomas" / "scene.glb").stat().st_size > 0
+    # Nothing of the killed attempt is left: no staging folder, no part
+    # file, only the whole bake.
+    assert sorted(p.name for p in out.iterdir()) == ["hysteroscopy_myomas", "summary.json"]
+    assert not list((out / "hysteroscopy_myomas").rglob("*.part"))

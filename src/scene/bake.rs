@@ -355,7 +355,11 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
             k as u64,
             progress,
         )
-        .map_err(|e| Error::invalid(format!("node '{}': interior: {e}", node.name)))?;
+        .map_err(|e| match e {
+            // Ctrl-C is not the node's fault.
+            Error::Cancelled => e,
+            e => Error::invalid(format!("node '{}': interior: {e}", node.name)),
+        })?;
         volume.spacing = interior.block_size / n as f64;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let mut stem = file_name(&node.name);

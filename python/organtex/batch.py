@@ -50,9 +50,13 @@ def output_name(scene: Path) -> str:
 
 def _inputs(scene: Path) -> list:
     """The scene file and the files it names (meshes, includes,
-    photographs), for the up-to-date check."""
-    import tomllib
+    photographs), for the up-to-date check. Before Python 3.11 (no
+    tomllib) only the scene file itself."""
     paths = [scene]
+    try:
+        import tomllib
+    except ImportError:
+        return paths
     try:
         data = tomllib.loads(scene.read_text())
     except (OSError, ValueError):

@@ -107,12 +107,35 @@ fn mesh_of(vertices: &[u8], faces: &[u8]) -> PyResult<organtex::mesh::TriMesh> {
     Ok(organtex::mesh::TriMesh::new(positions, triangles))
 }
 
-fn bytes_of<T: Copy, const N: usize>(
-    py: Python<'_>,
-    items: &[[T; N]],
-    le: fn(T) -> Vec<u8>,
-) -> Py<PyBytes> {
-    let out: Vec<u8> = items.iter().flatten().flat_map(|&x| le(x)).collect();
+/// A number as the little-endian bytes numpy's "<f8", "<u4" and uint8
+/// read.
+trait LittleEndian: Copy {
+    fn push(self, out: &mut Vec<u8>);
+}
+
+impl LittleEndian for f64 {
+    fn push(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl LittleEndian for u32 {
+    fn push(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl LittleEndian for u8 {
+    fn push(self, out: &mut Vec<u8>) {
+        out.push(self);
+    }
+}
+
+fn bytes_of<T: LittleEndian>(py: Python<'_>, items: &[T]) -> Py<PyBytes> {
+    let mut out = Vec::with_capacity(std::mem::size_of_val(items));
+    for &x in items {
+        x.push(&mut out);
+    }
     PyBytes::new(py, &out).unbind()
 }
 
@@ -131,11 +154,10 @@ fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<MeshBytes> {
         Some(f) => (f.of_face.clone(), f.names.clone()),
         None => (vec![0; mesh.triangles.len()], vec!["*".to_string()]),
     };
-    let ids: Vec<[u32; 1]> = ids.into_iter().map(|i| [i]).collect();
     Ok((
-        bytes_of(py, &positions, |x: f64| x.to_le_bytes().to_vec()),
-        bytes_of(py, &mesh.triangles, |x: u32| x.to_le_bytes().to_vec()),
-        bytes_of(py, &ids, |x: u32| x.to_le_bytes().to_vec()),
+        bytes_of(py, positions.as_flattened()),
+        bytes_of(py, mesh.triangles.as_flattened()),
+        bytes_of(py, &ids),
         names,
     ))
 }
@@ -166,8 +188,8 @@ fn unwrap(
     let coords: Vec<[f64; 2]> = uvs.coords.iter().map(|c| c.to_array()).collect();
     let report = serde_json::to_string(&out.report).expect("the report serialises");
     Ok((
-        bytes_of(py, &coords, |x: f64| x.to_le_bytes().to_vec()),
-        bytes_of(py, &uvs.triangles, |x: u32| x.to_le_bytes().to_vec()),
+        bytes_of(py, coords.as_flattened()),
+        bytes_of(py, uvs.triangles.as_flattened()),
         report,
     ))
 }
@@ -201,7 +223,7 @@ fn synth(
     let out = py
         .detach(|| organtex::synth::fnpts::synthesize(&ex, &opts, &callback))
         .map_err(error)?;
-    Ok(bytes_of(py, &out.pixels, |x: u8| vec![x]))
+    Ok(bytes_of(py, out.pixels.as_flattened()))
 }
 
 fn exemplar_of(
@@ -265,7 +287,7 @@ fn synth3d(
     let out = py
         .detach(|| organtex::synth::block::synthesize_block(&[ex], &opts, &callback))
         .map_err(error)?;
-    Ok(bytes_of(py, &out.voxels, |x: u8| vec![x]))
+    Ok(bytes_of(py, out.voxels.as_flattened()))
 }
 
 /// The section of a closed mesh by the plane normal . p = offset,
@@ -309,9 +331,9 @@ fn section(
         .map_err(error)?;
     let positions: Vec<[f64; 3]> = cut.positions.iter().map(|p| p.to_array()).collect();
     Ok((
-        bytes_of(py, &positions, |x: f64| x.to_le_bytes().to_vec()),
-        bytes_of(py, &cut.triangles, |x: u32| x.to_le_bytes().to_vec()),
-        bytes_of(py, &colours, |x: u8| vec![x]),
+        bytes_of(py, positions.as_flattened()),
+        bytes_of(py, cut.triangles.as_flattened()),
+        bytes_of(py, colours.as_flattened()),
     ))
 }
 
@@ -363,8 +385,8 @@ fn tetra(
         .map_err(error)?;
     let positions: Vec<[f64; 3]> = tets.positions.iter().map(|p| p.to_array()).collect();
     Ok((
-        bytes_of(py, &positions, |x: f64| x.to_le_bytes().to_vec()),
-        bytes_of(py, &tets.tets, |x: u32| x.to_le_bytes().to_vec()),
+        bytes_of(py, positions.as_flattened()),
+        bytes_of(py, tets.tets.as_flattened()),
         serde_json::to_string(&report).expect("the report serialises"),
     ))
 }

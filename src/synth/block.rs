@@ -566,13 +566,8 @@ fn random_candidates(
     count: usize,
     out: &mut Vec<u32>,
 ) {
-    let usable = pool;
     for k in 0..count {
-        let s = usable[rng::below(
-            seed,
-            &[key[0], key[1], key[2], 100 + k as u64],
-            usable.len(),
-        )];
+        let s = pool[rng::below(seed, &[key[0], key[1], key[2], 100 + k as u64], pool.len())];
         let (x, y) = src.split(s);
         offer(src, out, x, y);
     }

@@ -268,29 +268,28 @@ pub fn synthesize(
         opts.colour_classes,
     );
     let categories = category.iter().max().map_or(1, |m| m + 1);
-    let weighted = |c: usize| -> f64 {
-        profiles
-            .iter()
-            .zip(&category)
-            .filter(|(_, k)| **k == c)
-            .map(|(p, _)| p.area * p.weight)
-            .sum()
-    };
-    let all: f64 = (0..categories).map(weighted).sum();
-    let unfolded: Vec<(Distribution, f64)> = (0..categories)
+    let members: Vec<Vec<&Profile>> = (0..categories)
         .map(|c| {
-            let sizes: Vec<(f64, f64)> = sizes
+            profiles
                 .iter()
                 .zip(&category)
                 .filter(|(_, k)| **k == c)
-                .map(|(s, _)| *s)
-                .collect();
+                .map(|(p, _)| *p)
+                .collect()
+        })
+        .collect();
+    let weighted = |m: &[&Profile]| -> f64 { m.iter().map(|p| p.area * p.weight).sum() };
+    let all: f64 = members.iter().map(|m| weighted(m)).sum();
+    let unfolded: Vec<(Distribution, f64)> = members
+        .iter()
+        .map(|m| {
+            let sizes: Vec<(f64, f64)> = m.iter().map(|p| (p.diameter, p.weight)).collect();
             // Up to the category's own largest profile: small particles'
             // profiles would otherwise lend some of their volume to sizes
             // only another category has.
             let top = sizes.iter().map(|s| s.0).fold(0.0, f64::max);
             let dist = unfold::unfold(&sizes, area, opts.bins, top, &kernel);
-            (dist, fraction * weighted(c) / all)
+            (dist, fraction * weighted(m) / all)
         })
         .collect();
     let edges: Vec<f64> = (0..=opts.bins)
@@ -350,16 +349,6 @@ pub fn synthesize(
         .map(|s| s.binder_colour.map(|c| c * s.area))
         .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
         .map(|c| c / area);
-    let members: Vec<Vec<&Profile>> = (0..categories)
-        .map(|c| {
-            profiles
-                .iter()
-                .zip(&category)
-                .filter(|(_, k)| **k == c)
-                .map(|(p, _)| *p)
-                .collect()
-        })
-        .collect();
     let colours: Vec<[u8; 3]> = particle_category
         .iter()
         .enumerate()

@@ -6,6 +6,7 @@ mod db;
 mod generate;
 mod info;
 mod lst;
+mod morph;
 pub mod progress;
 mod section;
 mod stereology;
@@ -88,6 +89,10 @@ enum Command {
     /// layered by depth between two facets; writes a .lst model that
     /// `organtex section --lst` cuts.
     Lst(lst::Args),
+    /// The colour inside an organ morphed from photographs of a few cuts
+    /// placed as planes in it (seed 003): a plane section or a grid of
+    /// points, computed on demand from the photographs, no volume stored.
+    Morph(morph::Args),
     /// The desktop viewer: open a scene or mesh, pick tissues, unwrap,
     /// drag textures into place, cut the organ and see its inside, save
     /// and bake. Needs a display (or Xvfb).
@@ -110,6 +115,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Section(args)) => section::run(args),
         Some(Command::Tetra(args)) => tetra::run(args),
         Some(Command::Lst(args)) => lst::run(args),
+        Some(Command::Morph(args)) => morph::run(args),
         Some(Command::View(args)) => view::run(args),
         Some(Command::SynthQuality(args)) => synth::quality(args),
         None => {

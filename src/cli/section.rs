@@ -45,7 +45,7 @@ pub struct Args {
 }
 
 /// `n` finite comma-separated numbers.
-fn numbers(s: &str, n: usize, what: &str) -> std::result::Result<Vec<f64>, String> {
+pub(super) fn numbers(s: &str, n: usize, what: &str) -> std::result::Result<Vec<f64>, String> {
     super::comma_numbers::<f64>(s, n, what)?
         .into_iter()
         .map(|x| {
@@ -56,7 +56,7 @@ fn numbers(s: &str, n: usize, what: &str) -> std::result::Result<Vec<f64>, Strin
         .collect()
 }
 
-fn parse_plane(s: &str) -> std::result::Result<Plane, String> {
+pub(super) fn parse_plane(s: &str) -> std::result::Result<Plane, String> {
     let v = numbers(s, 4, "NX,NY,NZ,D (four finite numbers)")?;
     Plane::new(DVec3::new(v[0], v[1], v[2]), v[3]).map_err(|e| e.to_string())
 }

@@ -8,6 +8,7 @@
 pub mod cut;
 pub mod interior;
 pub mod lst;
+pub mod morph;
 pub mod section;
 pub mod stereology;
 

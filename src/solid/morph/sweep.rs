@@ -1,0 +1,172 @@
+//! Source points (seed 003, 4.2) and the fit of a photograph to the mesh
+//! (4.3).
+//!
+//! A point p takes its colour on exemplar X_i from a source point found by
+//! sweeping the exemplar plane along its normal (the straight path γ) until
+//! it holds p: the ray from the swept section's barycentre through p is
+//! mapped back onto X_i, keeping p's distance to the barycentre as a
+//! fraction of the distance to the section's outline. So an organ that
+//! narrows away from the cut still shows the cut's rim at its own rim.
+//!
+//! The swept sections are precomputed: the region X_i split, cut at
+//! `2 HALF_LEVELS + 1` heights, each reduced to its barycentre and its
+//! outline (the outermost boundary distance in `ANGLES` directions); a
+//! point interpolates between two heights and two directions.
+//!
+//! With a mask, the photograph is fitted to the mesh (4.3): the section's
+//! outline maps onto the outline of the masked tissue, radially from the
+//! barycentres, so the image boundary lies on the mesh boundary and the
+//! interior follows smoothly. Without one, the photograph is taken as
+//! placed.
+
+use glam::{DVec2, DVec3};
+
+use super::bsp::Side;
+use super::cells::Cells;
+use super::sections::Exemplar;
+use crate::error::Result;
+use crate::mesh::{Topology, TriMesh};
+
+/// Directions of an outline.
+const ANGLES: usize = 64;
+/// Swept sections each side of the exemplar plane.
+const HALF_LEVELS: usize = 24;
+/// Cells a side of a swept section.
+const LEVEL_SIDE: usize = 256;
+
+/// A plane region seen from its barycentre.
+#[derive(Clone, Debug)]
+struct Outline {
+    centre: DVec2,
+    radius: Vec<f32>,
+}
+
+impl Outline {
+    fn of(cells: &Cells) -> Option<Outline> {
+        let centre = cells.centroid()?;
+        Some(Outline {
+            centre,
+            radius: cells.outline(centre, ANGLES),
+        })
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// Height between swept sections.
+    dt: f64,
+    /// The swept sections, from height `-HALF_LEVELS dt` up; the middle one
+    /// is the exemplar's own.
+    levels: Vec<Outline>,
+    /// The masked tissue's outline in the photograph (4.3), if masked.
+    fit: Option<Outline>,
+}
+
+impl Sweep {
+    /// The sweep of `exemplar` through the region it split (`split`).
+    pub fn new(
+        mesh: &TriMesh,
+        topology: &Topology,
+        exemplars: &[Exemplar],
+        i: usize,
+        split: &[Side],
+    ) -> Result<Sweep> {
+        let e = &exemplars[i];
+        let reach = mesh
+            .positions
+            .iter()
+            .map(|&p| e.height(p).abs())
+            .fold(0.0, f64::max);
+        let dt = reach / HALF_LEVELS as f64;
+        let mut levels: Vec<Option<Outline>> = (0..=2 * HALF_LEVELS)
+            .map(|k| {
+                let t = (k as f64 - HALF_LEVELS as f64) * dt;
+                let Some(mut cells) = Cells::section(mesh, topology, e, t, LEVEL_SIDE)? else {
+                    return Ok(None);
+                };
+                cells.retain(e, t, |p| {
+                    split
+                        .iter()
+                        .all(|&(j, s)| (exemplars[j].height(p) >= 0.0) == s)
+                });
+                Ok(Outline::of(&cells))
+            })
+            .collect::<Result<_>>()?;
+        // Heights where the region has no section (beyond its ends, or past
+        // a neighbour plane) take the nearest one towards the exemplar.
+        for k in (0..HALF_LEVELS).rev() {
+            if levels[k].is_none() {
+                levels[k] = levels[k + 1].clone();
+            }
+        }
+        for k in HALF_LEVELS + 1..=2 * HALF_LEVELS {
+            if levels[k].is_none() {
+                levels[k] = levels[k - 1].clone();
+            }
+        }
+        let levels: Option<Vec<Outline>> = levels.into_iter().collect();
+        // The exemplar's own section is not empty (the BSP checked), so
+        // every level was filled from it.
+        let levels = levels.expect("the exemplar's own section is not empty");
+        let fit = e.mask.as_ref().and_then(|mask| {
+            Outline::of(&Cells {
+                lo: DVec2::ZERO,
+                step: 1.0,
+                w: e.width,
+                h: e.height,
+                inside: mask.clone(),
+            })
+        });
+        Ok(Sweep { dt, levels, fit })
+    }
+
+    /// The source point of `p` on the exemplar, in its image's pixel
+    /// coordinates, and `p`'s height above the exemplar plane.
+    #[inline]
+    pub fn source(&self, e: &Exemplar, p: DVec3) -> (f64, DVec2) {
+        let t = e.height(p);
+        let ab = e.pixel_coords(p);
+        if t == 0.0 && self.fit.is_none() {
+            return (t, ab);
+        }
+        let x = (t / self.dt + HALF_LEVELS as f64).clamp(0.0, (2 * HALF_LEVELS) as f64);
+        let k = (x as usize).min(2 * HALF_LEVELS - 1);
+        let f = x - k as f64;
+        let (l0, l1) = (&self.levels[k], &self.levels[k + 1]);
+        let centre = l0.centre.lerp(l1.centre, f);
+        let rel = ab - centre;
+        let r = rel.length();
+        if r == 0.0 {
+            return (t, self.target().centre);
+        }
+        let s = (rel.y.atan2(rel.x) / std::f64::consts::TAU).rem_euclid(1.0) * ANGLES as f64;
+        let swept = lerp(radius(l0, s), radius(l1, s), f);
+        let rho = if swept > 0.0 {
+            (r / swept).min(1.0)
+        } else {
+            1.0
+        };
+        let target = self.target();
+        (t, target.centre + rel * (rho * radius(target, s) / r))
+    }
+
+    /// The outline a swept point lands on: the masked tissue's, or the
+    /// exemplar's own section's.
+    #[inline]
+    fn target(&self) -> &Outline {
+        self.fit.as_ref().unwrap_or(&self.levels[HALF_LEVELS])
+    }
+}
+
+#[inline]
+fn lerp(a: f64, b: f64, f: f64) -> f64 {
+    a + (b - a) * f
+}
+
+/// An outline's radius at fractional direction `s` (0..ANGLES).
+#[inline]
+fn radius(o: &Outline, s: f64) -> f64 {
+    let k = s as usize % ANGLES;
+    let f = s - s.floor();
+    lerp(o.radius[k] as f64, o.radius[(k + 1) % ANGLES] as f64, f)
+}

@@ -1,0 +1,431 @@
+//! Interiors morphed from photographed cuts (organtex::solid::morph, seed
+//! 003) on real data: axial slices of a brain MRI template (tests/data/
+//! morph, cut by tools/compare_morph.py) placed in a box, with the slices
+//! held back between them as the truth.
+
+mod common;
+use common::organtex;
+use std::path::{Path, PathBuf};
+
+use glam::{DVec2, DVec3};
+use organtex::mesh::shapes::torus;
+use organtex::mesh::{Topology, TriMesh, io};
+use organtex::progress::Silent;
+use organtex::solid::Interior;
+use organtex::solid::morph::{Exemplar, Morph, MorphOptions};
+use organtex::synth::filter::Plane;
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/morph")
+        .join(name)
+}
+
+fn brain() -> (TriMesh, Topology, Morph) {
+    let mesh = io::read(&data("box.obj")).unwrap();
+    let topology = Topology::build(&mesh).unwrap();
+    let morph = Morph::read(
+        &mesh,
+        &topology,
+        &data("sections.toml"),
+        MorphOptions::default(),
+        &Silent,
+    )
+    .unwrap();
+    (mesh, topology, morph)
+}
+
+fn grey(name: &str) -> (usize, usize, Vec<f64>) {
+    let img = image::open(data(name)).unwrap().to_luma8();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    (w, h, img.pixels().map(|p| p.0[0] as f64).collect())
+}
+
+/// The morph's grey levels on the axial slice at height `z`, one point per
+/// voxel centre.
+fn slice(morph: &Morph, w: usize, h: usize, z: f64) -> Vec<f64> {
+    let points: Vec<DVec3> = (0..w * h)
+        .map(|i| DVec3::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5, z))
+        .collect();
+    morph
+        .colours(&points)
+        .iter()
+        .map(|c| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0)
+        .collect()
+}
+
+#[test]
+fn an_exemplar_plane_shows_its_photograph() {
+    let (_, _, morph) = brain();
+    for (name, z) in [
+        ("slice_080.png", 80.5),
+        ("slice_096.png", 96.5),
+        ("slice_112.png", 112.5),
+    ] {
+        let (w, h, photo) = grey(name);
+        let got = slice(&morph, w, h, z);
+        let mut worst = 0.0f64;
+        for y in 3..h - 3 {
+            for x in 3..w - 3 {
+                worst = worst.max((got[y * w + x] - photo[y * w + x]).abs());
+            }
+        }
+        assert!(worst <= 2.0, "{name}: off by {worst}/255 on its own plane");
+    }
+}
+
+#[test]
+fn the_colour_is_continuous_across_region_boundaries() {
+    let (_, _, morph) = brain();
+    let h = 0.25;
+    // Columns through the tissue, on a coarse lattice.
+    let columns: Vec<DVec2> = (0..40)
+        .flat_map(|i| {
+            (0..40).map(move |j| DVec2::new(40.0 + 3.0 * i as f64, 40.0 + 4.0 * j as f64))
+        })
+        .collect();
+    let jump = |at: &dyn Fn(DVec2) -> (DVec3, DVec3)| -> f64 {
+        let (a, b): (Vec<DVec3>, Vec<DVec3>) = columns.iter().map(|&c| at(c)).unzip();
+        let (ca, cb) = (morph.colours(&a), morph.colours(&b));
+        ca.iter()
+            .zip(&cb)
+            .map(|(p, q)| {
+                (0..3)
+                    .map(|k| (p[k] as f64 - q[k] as f64).abs())
+                    .sum::<f64>()
+                    / 3.0
+            })
+            .sum::<f64>()
+            / columns.len() as f64
+    };
+    let boundary = 96.5;
+    assert_ne!(
+        morph.region_of(DVec3::new(100.0, 100.0, boundary - h / 2.0)),
+        morph.region_of(DVec3::new(100.0, 100.0, boundary + h / 2.0)),
+        "the points straddle a region boundary"
+    );
+    let across = jump(&|c| (c.extend(boundary - h / 2.0), c.extend(boundary + h / 2.0)));
+    // Ordinary neighbours at the same distance: along z inside a region,
+    // and along x.
+    let along_z = [86.0, 90.0, 102.0, 106.0]
+        .map(|z| jump(&|c| (c.extend(z - h / 2.0), c.extend(z + h / 2.0))))
+        .into_iter()
+        .fold(0.0, f64::max);
+    let along_x = jump(&|c| (c.extend(90.0), (c + DVec2::new(h, 0.0)).extend(90.0)));
+    eprintln!("mean jump: across {across:.3}, along z {along_z:.3}, along x {along_x:.3}");
+    assert!(
+        across <= along_z.max(along_x),
+        "mean jump across the boundary {across:.3} > across neighbours {along_z:.3} (z), {along_x:.3} (x)"
+    );
+}
+
+/// RMS difference after a Gaussian blur of σ 2 px, and the mean gradient
+/// magnitude over the truth's: compare_morph.py's measures.
+fn scores(pred: &[f64], truth: &[f64], w: usize, h: usize) -> (f64, f64) {
+    let ones = vec![1.0; w * h];
+    let blur = |v: &[f64]| Plane::new(w, h, v.iter().map(|&x| x as f32).collect()).blur(2.0, &ones);
+    let (bp, bt) = (blur(pred), blur(truth));
+    let rms = (bp
+        .data
+        .iter()
+        .zip(&bt.data)
+        .map(|(a, b)| ((a - b) as f64).powi(2))
+        .sum::<f64>()
+        / (w * h) as f64)
+        .sqrt();
+    let gradient = |v: &[f64]| -> f64 {
+        let mut sum = 0.0;
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                let gx = (v[y * w + x + 1] - v[y * w + x - 1]) / 2.0;
+                let gy = (v[(y + 1) * w + x] - v[(y - 1) * w + x]) / 2.0;
+                sum += gx.hypot(gy);
+            }
+        }
+        sum
+    };
+    (rms, gradient(pred) / gradient(truth))
+}
+
+#[test]
+fn held_back_slices_beat_the_nearest_exemplar_and_keep_their_detail() {
+    let (_, _, morph) = brain();
+    for (truth, z, below, above) in [
+        ("truth_088.png", 88.5, "slice_080.png", "slice_096.png"),
+        ("truth_104.png", 104.5, "slice_096.png", "slice_112.png"),
+    ] {
+        let (w, h, truth) = grey(truth);
+        let (_, _, a) = grey(below);
+        let (_, _, b) = grey(above);
+        let ours = scores(&slice(&morph, w, h, z), &truth, w, h);
+        let nearest = scores(&a, &truth, w, h).0.min(scores(&b, &truth, w, h).0);
+        let fade: Vec<f64> = a.iter().zip(&b).map(|(x, y)| 0.5 * (x + y)).collect();
+        let fade = scores(&fade, &truth, w, h);
+        eprintln!(
+            "z {z}: blurred RMS {:.2} (nearest {nearest:.2}, cross-fading {:.2}), detail {:.3} (cross-fading {:.3})",
+            ours.0, fade.0, ours.1, fade.1
+        );
+        assert!(
+            ours.0 < nearest && ours.0 <= 1.2 * fade.0,
+            "z {z}: blurred RMS {:.2}, nearest exemplar {nearest:.2}, cross-fading {:.2}",
+            ours.0,
+            fade.0
+        );
+        assert!(
+            (0.85..=1.2).contains(&ours.1),
+            "z {z}: detail ratio {:.3} (cross-fading {:.3})",
+            ours.1,
+            fade.1
+        );
+    }
+}
+
+#[test]
+fn the_same_bytes_on_any_thread_count() {
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let (_, _, morph) = brain();
+                let points: Vec<DVec3> = (0..20_000)
+                    .map(|i| {
+                        let f = i as f64;
+                        DVec3::new(
+                            10.0 + (f * 0.618).rem_euclid(177.0),
+                            10.0 + (f * 0.377).rem_euclid(213.0),
+                            70.0 + (f * 0.0213).rem_euclid(50.0),
+                        )
+                    })
+                    .collect();
+                morph.colours(&points)
+            })
+    };
+    assert_eq!(run(1), run(3));
+}
+
+/// A sections file in `dir` with one exemplar per `(image, origin, u, v)`;
+/// images named `*.png` that do not exist yet are written as a 32x32 grey
+/// gradient.
+fn sections(dir: &Path, entries: &[(&str, [f64; 3], [f64; 3], [f64; 3])]) -> PathBuf {
+    let mut toml = String::new();
+    for (image, o, u, v) in entries {
+        let path = dir.join(image);
+        if !path.exists() {
+            image::GrayImage::from_fn(32, 32, |x, y| image::Luma([(4 * x + 3 * y) as u8]))
+                .save(&path)
+                .unwrap();
+        }
+        toml +=
+            &format!("[[exemplar]]\nimage = \"{image}\"\norigin = {o:?}\nu = {u:?}\nv = {v:?}\n\n");
+    }
+    let path = dir.join("sections.toml");
+    std::fs::write(&path, toml).unwrap();
+    path
+}
+
+fn refused(mesh: &TriMesh, path: &Path) -> String {
+    let topology = Topology::build(mesh).unwrap();
+    match Morph::read(mesh, &topology, path, MorphOptions::default(), &Silent) {
+        Ok(_) => panic!("accepted {}", std::fs::read_to_string(path).unwrap()),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_sections_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cube = io::read(&data("box.obj")).unwrap();
+    let (x, y) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let cases: Vec<(Vec<(&str, [f64; 3], [f64; 3], [f64; 3])>, &str)> = vec![
+        (vec![("a.png", [0.0, 0.0, 300.0], x, y)], "outside the mesh"),
+        (
+            vec![
+                ("a.png", [0.0, 0.0, 50.5], x, y),
+                ("b.png", [10.0, 5.0, 50.5], x, y),
+            ],
+            "coincident",
+        ),
+        (
+            vec![("a.png", [0.0, 0.0, 50.5], [0.0; 3], y)],
+            "zero length",
+        ),
+        (
+            vec![("a.png", [0.0, 0.0, 50.5], x, [2.0, 0.0, 0.0])],
+            "parallel",
+        ),
+        (
+            vec![("a.png", [500.0, 500.0, 50.5], x, y)],
+            "does not reach the mesh",
+        ),
+    ];
+    for (entries, want) in cases {
+        let path = sections(d, &entries);
+        let msg = refused(&cube, &path);
+        assert!(msg.contains(want), "wanted '{want}' in: {msg}");
+        assert!(msg.contains("sections.toml"), "the file is named: {msg}");
+        assert!(msg.contains("exemplar"), "the exemplar is named: {msg}");
+    }
+    std::fs::write(d.join("broken.png"), b"not a png").unwrap();
+    let path = sections(d, &[("broken.png", [0.0, 0.0, 50.5], x, y)]);
+    let msg = refused(&cube, &path);
+    assert!(msg.contains("broken.png"), "{msg}");
+
+    // Seed 003, Fig. 2: a subdomain that is not a disk. A torus around z
+    // cut by z = 0 gives a ring (a hole); by x = 0, two discs.
+    let ring = torus(3.0, 1.0, 48, 24);
+    let s = 0.25;
+    let path = sections(
+        d,
+        &[("a.png", [-5.0, -5.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0])],
+    );
+    let msg = refused(&ring, &path);
+    assert!(msg.contains("hole") && msg.contains("disk"), "{msg}");
+    let path = sections(
+        d,
+        &[("a.png", [0.0, -5.0, -5.0], [0.0, s, 0.0], [0.0, 0.0, s])],
+    );
+    let msg = refused(&ring, &path);
+    assert!(msg.contains("2 pieces") && msg.contains("disk"), "{msg}");
+}
+
+#[test]
+fn a_masked_photograph_is_fitted_to_the_mesh() {
+    // Seed 003, 4.3: a photograph whose tissue (a disc, masked) is smaller
+    // than the section is stretched onto it: no pixel the mask hides shows
+    // anywhere on the plane, and the tissue's rim lands on the mesh's rim.
+    let mesh = io::read(&data("box.obj")).unwrap();
+    let topology = Topology::build(&mesh).unwrap();
+    let (w, h) = (197, 233);
+    let centre = DVec2::new(98.0, 116.0);
+    let inside = |x: usize, y: usize| (DVec2::new(x as f64, y as f64) - centre).length() < 60.0;
+    let rgb: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if !inside(x, y) {
+                [0.0, 0.0, 255.0]
+            } else if (DVec2::new(x as f64, y as f64) - centre).length() > 54.0 {
+                [0.0, 255.0, 0.0]
+            } else {
+                [200.0, 60.0, 60.0]
+            }
+        })
+        .collect();
+    let mask: Vec<bool> = (0..w * h).map(|i| inside(i % w, i / w)).collect();
+    let place = |z: f64| [DVec3::new(0.0, 0.0, z), DVec3::X, DVec3::Y];
+    let exemplar = Exemplar::new("disc.png".into(), w, h, rgb, Some(mask), place(96.5)).unwrap();
+    let morph = Morph::new(
+        &mesh,
+        &topology,
+        vec![exemplar],
+        MorphOptions::default(),
+        &Silent,
+    )
+    .unwrap();
+    let points: Vec<DVec3> = (0..w * h)
+        .map(|i| DVec3::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5, 96.5))
+        .collect();
+    let colours = morph.colours(&points);
+    let blue = colours.iter().filter(|c| c[2] > 128).count();
+    assert_eq!(blue, 0, "{blue} points show what the mask hides");
+    // The rim of the box's section (its outer ring of pixels) shows the
+    // disc's green rim, and its centre the disc's centre.
+    let rim: Vec<&[u8; 3]> = (0..w * h)
+        .filter(|&i| {
+            let (x, y) = (i % w, i / w);
+            x == 1 || y == 1 || x == w - 2 || y == h - 2
+        })
+        .map(|i| &colours[i])
+        .collect();
+    let green = rim.iter().filter(|c| c[1] > 128 && c[0] < 128).count();
+    eprintln!("{green} of {} rim points show the tissue's rim", rim.len());
+    assert!(
+        green as f64 >= 0.9 * rim.len() as f64,
+        "{green} of {} rim points are the tissue's rim",
+        rim.len()
+    );
+    let mid = colours[116 * w + 98];
+    assert!(mid[0] > 150 && mid[1] < 110, "the centre shows {mid:?}");
+}
+
+#[test]
+fn the_cli_writes_a_cut_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cut.png");
+    let mesh = data("box.obj");
+    let sections = data("sections.toml");
+    let (ok, stdout, stderr) = organtex(&[
+        "morph",
+        mesh.to_str().unwrap(),
+        "--sections",
+        sections.to_str().unwrap(),
+        "--grid",
+        "0,0,88.5;1,0,0;0,1,0;197,233",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let summary: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(summary["points"], 197 * 233);
+    for key in ["precompute_seconds", "seconds", "points_per_second"] {
+        assert!(summary[key].as_f64().unwrap() > 0.0, "{key}: {summary}");
+    }
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (197, 233));
+
+    // A plane section: the plane x + z = 150 cuts the box obliquely.
+    let cut = dir.path().join("oblique.png");
+    let (ok, _, stderr) = organtex(&[
+        "morph",
+        mesh.to_str().unwrap(),
+        "--sections",
+        sections.to_str().unwrap(),
+        "--plane",
+        "1,0,1,150",
+        "--resolution",
+        "256",
+        "-o",
+        cut.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let img = image::open(&cut).unwrap().to_rgba8();
+    assert!(img.pixels().filter(|p| p[3] == 255).count() > 10_000);
+
+    // Bad sections: one message naming the file, nothing written.
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[[exemplar]]\nimage = \"missing.png\"\norigin = [0.0, 0.0, 50.5]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 1.0, 0.0]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("never.png");
+    let (ok, _, stderr) = organtex(&[
+        "morph",
+        mesh.to_str().unwrap(),
+        "--sections",
+        bad.to_str().unwrap(),
+        "--grid",
+        "0,0,88.5;1,0,0;0,1,0;16,16",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("missing.png"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!out.exists());
+    std::fs::write(&bad, "[[exemplar]]\nimage = 3\n").unwrap();
+    let (ok, _, stderr) = organtex(&[
+        "morph",
+        mesh.to_str().unwrap(),
+        "--sections",
+        bad.to_str().unwrap(),
+        "--grid",
+        "0,0,88.5;1,0,0;0,1,0;16,16",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("bad.toml"), "{stderr}");
+    assert!(!out.exists());
+}

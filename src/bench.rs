@@ -231,6 +231,16 @@ pub fn workloads() -> Vec<Workload> {
             prepare: lst_cut_uterus,
         },
         Workload {
+            name: "morph points",
+            what: "1M points between the brain MRI slices of tests/data/morph, histogram matching on, warps precomputed (seed 003: 20,000 points/s; target >= 2M points/s, <= 0.5 s)",
+            prepare: |root| morph_step(root, false),
+        },
+        Workload {
+            name: "morph cut 512",
+            what: "a 512x512 oblique cut through the same morph (target <= 150 ms)",
+            prepare: |root| morph_step(root, true),
+        },
+        Workload {
             name: "section bunny",
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,
@@ -345,6 +355,46 @@ fn section_step(root: &Path) -> Result<Step> {
     Ok(Box::new(move || {
         let section = plane_section(&mesh, &topo, plane)?;
         std::hint::black_box(sample_colours(&section, &volume, &placement));
+        Ok(())
+    }))
+}
+
+/// The morph of tests/data/morph (three MRI slices in a box), precomputed
+/// untimed; timed: 1M scattered points, or a 512x512 oblique cut.
+fn morph_step(root: &Path, cut: bool) -> Result<Step> {
+    use crate::solid::Interior;
+    use crate::solid::morph::{Morph, MorphOptions};
+    let dir = root.join("tests").join("data").join("morph");
+    let mesh = io::read(&dir.join("box.obj"))?;
+    let topology = Topology::build(&mesh)?;
+    let morph = Morph::read(
+        &mesh,
+        &topology,
+        &dir.join("sections.toml"),
+        MorphOptions::default(),
+        &Silent,
+    )?;
+    let points: Vec<glam::DVec3> = if cut {
+        // The plane x + z = 150 across the box, 512 points a side.
+        let (o, u, v) = (
+            glam::DVec3::new(150.0 - 30.0, 0.0, 30.0),
+            glam::DVec3::new(-100.0, 0.0, 100.0) / 512.0,
+            glam::DVec3::new(0.0, 233.0, 0.0) / 512.0,
+        );
+        (0..512 * 512)
+            .map(|i| o + u * ((i % 512) as f64 + 0.5) + v * ((i / 512) as f64 + 0.5))
+            .collect()
+    } else {
+        (0..1_000_000u64)
+            .map(|i| {
+                let h = crate::rng::hash(7, &[i]);
+                let f = |k: u32| ((h >> (21 * k)) & 0x1f_ffff) as f64 / 2_097_152.0;
+                glam::DVec3::new(20.0 + 157.0 * f(0), 20.0 + 193.0 * f(1), 72.0 + 48.0 * f(2))
+            })
+            .collect()
+    };
+    Ok(Box::new(move || {
+        std::hint::black_box(morph.colours(&points));
         Ok(())
     }))
 }

@@ -731,7 +731,7 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
         (
             "block_size = 5.0",
             "block_size = 5.0\nmethod = \"lapped\"",
-            "unknown variant `lapped`, expected one of `fnpts`, `optimize`, `stereology`",
+            "unknown variant `lapped`, expected one of `fnpts`, `optimize`, `stereology`, `morph`",
             "lapped",
         ),
     ];
@@ -897,4 +897,107 @@ fn includes_bring_in_cameras_and_nodes() {
     assert_eq!(spec.cameras.len(), 1);
     assert_eq!(spec.nodes.len(), 1);
     assert_eq!(spec.nodes[0].facets.len(), 2);
+}
+
+#[test]
+fn a_scene_interior_can_be_morphed_from_photographed_cuts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let scene = root().join("scenes").join("myoma_cuts.toml");
+    let baked = bake(&scene, &out, &BakeOptions::default(), &Silent).unwrap();
+    let line = &baked.report.interiors[0];
+    assert_eq!(line.method, InteriorMethod::Morph);
+    let m = line.morph.as_ref().expect("a morph line");
+    assert_eq!((m.exemplars, m.regions), (2, 3));
+
+    // The copied cuts are the morph: on the second cut's plane (y = 12)
+    // the organ shows that photograph, and the block holds the morph's
+    // colour at each voxel centre, placed as the report says.
+    let mesh = uterus::generate(&CavityParams {
+        wall_thickness: 10.0,
+        ..uterus::demo()
+    })
+    .unwrap();
+    let topology = Topology::build(&mesh).unwrap();
+    let morph = organtex::solid::morph::Morph::read(
+        &mesh,
+        &topology,
+        &out.join(&m.sections),
+        Default::default(),
+        &Silent,
+    )
+    .unwrap();
+    use organtex::solid::Interior;
+    let photo = image::open(root().join("scenes/myoma_cuts/he_nests.jpg"))
+        .unwrap()
+        .to_rgb8();
+    let (origin, u, v) = (
+        DVec3::new(-25.6, 12.0, -1.5),
+        DVec3::new(0.1, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, 0.1),
+    );
+    let pixels: Vec<(u32, u32)> = (8..504)
+        .step_by(7)
+        .flat_map(|j| (8..504).step_by(5).map(move |i| (i, j)))
+        .collect();
+    let points: Vec<DVec3> = pixels
+        .iter()
+        .map(|&(i, j)| origin + u * (i as f64 + 0.5) + v * (j as f64 + 0.5))
+        .collect();
+    let got = morph.colours(&points);
+    for (&(i, j), c) in pixels.iter().zip(&got) {
+        let want = photo.get_pixel(i, j).0;
+        assert!(
+            (0..3).all(|k| c[k].abs_diff(want[k]) <= 2),
+            "pixel ({i}, {j}): {c:?}, the photograph {want:?}"
+        );
+    }
+    let block = Volume::read_nrrd(&out.join(&line.file)).unwrap();
+    let corner = DVec3::from_array(m.block_origin);
+    for i in (0..block.voxels.len()).step_by(997) {
+        let n = block.size[0];
+        let centre = corner
+            + DVec3::new(
+                (i % n) as f64 + 0.5,
+                ((i / n) % n) as f64 + 0.5,
+                (i / (n * n)) as f64 + 0.5,
+            ) * line.voxel_size;
+        assert_eq!(block.voxels[i], morph.colour(centre), "voxel {i}");
+    }
+
+    // A plane through the cavity meets the wall in a ring (here cut open by
+    // the cervical canal into two pieces): refused, named, nothing written.
+    let ring = dir.path().join("ring");
+    std::fs::create_dir_all(&ring).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/myoma_cuts/sections.toml"))
+        .unwrap()
+        .replace("../../database/sources/ihc.png", "ihc.png")
+        .replace("origin = [-25.6, 8.0, -1.5]", "origin = [-25.6, 0.0, -1.5]");
+    std::fs::copy(
+        root().join("database/sources/ihc.png"),
+        ring.join("ihc.png"),
+    )
+    .unwrap();
+    std::fs::copy(
+        root().join("scenes/myoma_cuts/he_nests.jpg"),
+        ring.join("he_nests.jpg"),
+    )
+    .unwrap();
+    std::fs::write(ring.join("sections.toml"), text).unwrap();
+    let body = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("myoma_cuts/sections.toml", "ring/sections.toml");
+    let scene = scene_file(dir.path(), "ring.toml", &body);
+    let out = dir.path().join("out-ring");
+    let err = bake(&scene, &out, &BakeOptions::default(), &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("node 'uterus'")
+            && err.contains("exemplar 1 (ihc.png)")
+            && err.contains("2 pieces")
+            && err.contains("disk"),
+        "{err}"
+    );
+    assert!(files_in(&out).is_empty(), "{err}: output written");
 }

@@ -150,14 +150,26 @@ fn print(baked: &Baked) {
         ),
     }
     for i in &r.interiors {
+        let from = match &i.morph {
+            Some(m) => format!(
+                "morphed from {} photographed cuts in {} regions, placed at {:?}, not tiling",
+                m.exemplars, m.regions, m.block_origin
+            ),
+            None => format!("from {}", i.texture),
+        };
         println!(
-            "      {} ({} interior: {}^3 voxels of {} units, from {})",
+            "      {} ({} interior: {}^3 voxels of {:.4} units, {from})",
             baked.dir.join(&i.file).display(),
             i.node,
             i.voxels,
             i.voxel_size,
-            i.texture
         );
+        if let Some(m) = &i.morph {
+            println!(
+                "      {} (the cuts, for morphing any surface on demand: organtex morph)",
+                baked.dir.join(&m.sections).display()
+            );
+        }
         if let Some(t) = &i.tet_mesh {
             println!(
                 "      {} ({} tets, dihedral angles {:.1} to {:.1} degrees)",

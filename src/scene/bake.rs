@@ -65,6 +65,27 @@ pub struct InteriorLine {
     /// The lapped solid texture, when `[node.interior.lst]` is given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lst: Option<LstLine>,
+    /// The morph, when `method = "morph"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub morph: Option<MorphLine>,
+}
+
+/// A node's interior morphed from photographed cuts (seed 003). Its block
+/// is the morph sampled over the node's bounding cube, placed at
+/// `block_origin` (it does not tile); the sections file and photographs
+/// are copied beside it for a simulator to morph cuts on demand
+/// (`solid::morph::Morph`).
+#[derive(Clone, Debug, Serialize)]
+pub struct MorphLine {
+    /// The copied sections file, relative to the bake's folder.
+    pub sections: PathBuf,
+    /// Photographs (exemplar planes) and the regions they split it into.
+    pub exemplars: usize,
+    pub regions: usize,
+    /// Where the block's corner lies (its voxels span `voxel_size`).
+    pub block_origin: [f64; 3],
+    /// BSP, sweeps and warps.
+    pub precompute_s: f64,
 }
 
 /// A node's lapped solid texture (`[node.interior.lst]`).
@@ -328,6 +349,10 @@ pub fn bake(
         if let (Some(line), Some(model)) = (&interior.line.lst, &interior.lst) {
             model.write(&out.join(&line.file))?;
         }
+        if let (Some(line), Some(sections)) = (&interior.line.morph, &interior.sections) {
+            let dir = out.join(&line.sections);
+            crate::solid::morph::copy_sections(sections, dir.parent().unwrap_or(out))?;
+        }
     }
     Ok(baked)
 }
@@ -341,6 +366,10 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
         let Some(interior) = &node.interior else {
             continue;
         };
+        if interior.method == InteriorMethod::Morph {
+            out.push(morphed(scene, k, interior, n, &out, progress)?);
+            continue;
+        }
         let colour = scene.tissues.colour.get(&interior.texture).ok_or_else(|| {
             Error::invalid(format!(
                 "node '{}': interior texture '{}' was not built",
@@ -362,14 +391,7 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
         })?;
         volume.spacing = interior.block_size / n as f64;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
-        let mut stem = file_name(&node.name);
-        if out
-            .iter()
-            .any(|i: &Interior| i.line.file.file_stem() == Some(std::ffi::OsStr::new(&stem)))
-        {
-            stem = format!("{stem}-{k}");
-        }
-        let file = PathBuf::from("interior").join(format!("{stem}.nrrd"));
+        let file = interior_file(&node.name, k, &out);
         let tets = if interior.tet_mesh || interior.lst.is_some() {
             Some(tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)?)
         } else {
@@ -401,13 +423,93 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
                     .filter(|_| interior.tet_mesh)
                     .map(|(line, _)| line.clone()),
                 lst: lst.as_ref().map(|(line, _)| line.clone()),
+                morph: None,
             },
             volume,
             tets: tets.map(|(_, m)| m),
             lst: lst.map(|(_, m)| m),
+            sections: None,
         });
     }
     Ok(out)
+}
+
+/// interior/NODE.nrrd, the name made distinct from those already taken
+/// (nodes "a b" and "a_b" meet as file names).
+fn interior_file(node: &str, k: usize, taken: &[Interior]) -> PathBuf {
+    let mut stem = file_name(node);
+    if taken
+        .iter()
+        .any(|i| i.line.file.file_stem() == Some(std::ffi::OsStr::new(&stem)))
+    {
+        stem = format!("{stem}-{k}");
+    }
+    PathBuf::from("interior").join(format!("{stem}.nrrd"))
+}
+
+/// Node `k`'s interior morphed from its sections (seed 003): precomputed,
+/// sampled into an `n`-voxel block over its bounding cube.
+fn morphed(
+    scene: &BakedScene,
+    k: usize,
+    interior: &crate::scene::file::Interior,
+    n: usize,
+    taken: &[Interior],
+    progress: &dyn Progress,
+) -> Result<Interior> {
+    use crate::solid::morph::{Morph, MorphOptions};
+    let name = &scene.spec.nodes[k].name;
+    let err = |e: Error| match e {
+        Error::Cancelled => e,
+        e => Error::invalid(format!("node '{name}': interior: {e}")),
+    };
+    // Checked when the scene loaded: a morph names its sections file.
+    let sections = interior.sections.clone().expect("a morph has sections");
+    let mesh = &scene.nodes[k].mesh;
+    let topology = crate::mesh::Topology::build(mesh).map_err(err)?;
+    let t = Instant::now();
+    let morph = Morph::read(
+        mesh,
+        &topology,
+        &sections,
+        MorphOptions::default(),
+        progress,
+    )
+    .map_err(err)?;
+    let precompute_s = t.elapsed().as_secs_f64();
+    let (lo, hi) = mesh
+        .bounding_box()
+        .ok_or_else(|| err(Error::invalid("the mesh has no vertices")))?;
+    let (volume, placement) = morph.block(lo, hi, n).map_err(err)?;
+    let file = interior_file(name, k, taken);
+    let copied = file.with_file_name(format!(
+        "{}-sections",
+        file.file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into())
+    ));
+    Ok(Interior {
+        line: InteriorLine {
+            node: name.clone(),
+            texture: interior.texture.clone(),
+            method: interior.method,
+            file,
+            voxels: n,
+            voxel_size: placement.scale,
+            tet_mesh: None,
+            lst: None,
+            morph: Some(MorphLine {
+                sections: copied.join("sections.toml"),
+                exemplars: morph.exemplars().len(),
+                regions: morph.regions(),
+                block_origin: lo.to_array(),
+                precompute_s,
+            }),
+        },
+        volume,
+        tets: None,
+        lst: None,
+        sections: Some(sections),
+    })
 }
 
 /// The node's inside as tetrahedra at the default resolution, and its
@@ -543,6 +645,8 @@ struct Interior {
     volume: Volume,
     tets: Option<crate::tetra::TetMesh>,
     lst: Option<crate::solid::lst::LstModel>,
+    /// A morph's sections file, copied beside the block.
+    sections: Option<PathBuf>,
 }
 
 /// A node name as a file name: letters, digits, '-' and '_' kept, the rest

@@ -135,7 +135,7 @@ pub fn ensure_tissues(
                 needed.push((o.clone(), Output::Overlay));
             }
         }
-        if let Some(interior) = &node.interior {
+        if let Some(interior) = node.interior.as_ref().filter(|i| !i.texture.is_empty()) {
             needed.push((interior.texture.clone(), Output::Colour));
         }
     }

@@ -121,16 +121,24 @@ fn default_max_conformal() -> Spanned<f64> {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Interior {
-    /// Database tissue whose exemplar the block is synthesised from.
+    /// Database tissue whose exemplar the block is synthesised from
+    /// (not used by method = "morph", which may leave it out).
+    #[serde(default)]
     pub texture: String,
     /// Mesh units covered by one block.
     #[serde(default = "default_block_size")]
     pub block_size: f64,
     /// How the block is made: "fnpts" (sharp; streaks on cuts across x),
     /// "optimize" (no streaks, softer) or "stereology" (particles in a
-    /// binder measured in `photographs`, seed 001).
+    /// binder measured in `photographs`, seed 001) or "morph" (morphed
+    /// from the photographed cuts of `sections`, seed 003).
     #[serde(default)]
     pub method: InteriorMethod,
+    /// The sections file for `method = "morph"` (photographs of cuts
+    /// placed as planes in the node; `organtex morph --help`), relative to
+    /// the scene file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sections: Option<PathBuf>,
     /// Photographs of sections for `method = "stereology"`, relative to
     /// the scene file (none: the tissue's colour texture).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -342,7 +350,8 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
     if let Some(worst) = interiors
         .iter()
         .map(|i| {
-            // Stereology copies its photograph by guided FNPTS.
+            // Stereology copies its photograph by guided FNPTS; a morph
+            // samples its block at the same size (counted as the same).
             let method = i.method.block().unwrap_or(Method::Fnpts);
             block_bytes(spec.bake.interior_voxels, 1, method)
         })
@@ -617,6 +626,47 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                 "are measured by method = \"stereology\" alone".to_string(),
             ));
         }
+        match (&i.sections, i.method == InteriorMethod::Morph) {
+            (None, true) => {
+                return Err(at(
+                    interior.span(),
+                    "interior sections",
+                    "method = \"morph\" needs sections = \"FILE.toml\" (the placed photographs)"
+                        .to_string(),
+                ));
+            }
+            (Some(_), false) => {
+                return Err(at(
+                    interior.span(),
+                    "interior sections",
+                    "are morphed by method = \"morph\" alone".to_string(),
+                ));
+            }
+            (Some(s), true) if !dir.join(s).is_file() => {
+                return Err(at(
+                    interior.span(),
+                    "interior sections",
+                    format!("{} not found", dir.join(s).display()),
+                ));
+            }
+            _ => {}
+        }
+        if i.texture.is_empty() && i.method != InteriorMethod::Morph {
+            return Err(at(
+                interior.span(),
+                "interior texture",
+                "is needed: the tissue the block is synthesised from".to_string(),
+            ));
+        }
+        if i.method == InteriorMethod::Morph && (i.lst.is_some() || i.tet_mesh) {
+            return Err(at(
+                interior.span(),
+                "interior",
+                "method = \"morph\" colours the node from its sections alone: \
+                 leave out lst and tet_mesh"
+                    .to_string(),
+            ));
+        }
         if let Some(missing) = i.photographs.iter().find(|p| !dir.join(p).is_file()) {
             return Err(at(
                 interior.span(),
@@ -697,6 +747,7 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                 .iter()
                 .map(|p| dir.join(p))
                 .collect(),
+            sections: i.get_ref().sections.as_ref().map(|s| dir.join(s)),
             ..i.get_ref().clone()
         }),
         origin: Origin {
@@ -729,6 +780,7 @@ pub fn check_tissues(spec: &SceneSpec, ids: &[String]) -> Result<()> {
             }
         }
         if let Some(interior) = &node.interior
+            && !interior.texture.is_empty()
             && !known(&interior.texture)
         {
             return Err(node.origin.error(format!(

@@ -8,7 +8,9 @@
 //! neighbourhoods of the exemplar's scale; a much larger exemplar only
 //! costs search time), synthesised into a tiling block (seed 004, 3.3);
 //! or particles from stereology (seed 001) measured in photographs of
-//! sections, at the photographs' own scale.
+//! sections, at the photographs' own scale. A morph (seed 003,
+//! `solid::morph::Morph`) is a third model: it colours points from placed
+//! photographs and stores no block.
 
 use std::path::{Path, PathBuf};
 
@@ -59,6 +61,9 @@ pub enum InteriorMethod {
     /// Particles in a binder from stereology (seed 001), measured in the
     /// node's photographs of sections.
     Stereology,
+    /// Morphed on demand from photographs of a few cuts placed as planes
+    /// in the node (seed 003, `solid::morph`); no block of its own.
+    Morph,
 }
 
 impl InteriorMethod {
@@ -67,7 +72,7 @@ impl InteriorMethod {
         match self {
             InteriorMethod::Fnpts => Some(Method::Fnpts),
             InteriorMethod::Optimize => Some(Method::Optimize),
-            InteriorMethod::Stereology => None,
+            InteriorMethod::Stereology | InteriorMethod::Morph => None,
         }
     }
 }
@@ -83,6 +88,12 @@ pub fn interior_block(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<Volume> {
+    if method == InteriorMethod::Morph {
+        return Err(crate::error::Error::invalid(
+            "a morphed interior is made from the node's mesh and sections file \
+             (solid::morph::Morph), not as a block",
+        ));
+    }
     let Some(method) = method.block() else {
         let paths = if photographs.is_empty() {
             vec![colour.to_path_buf()]

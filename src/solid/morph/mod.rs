@@ -28,12 +28,13 @@ use std::path::Path;
 use glam::DVec3;
 use rayon::prelude::*;
 
-pub use sections::{Exemplar, read_sections};
+pub use sections::{Exemplar, copy_sections, read_sections};
 
 use crate::error::{Error, Result};
 use crate::mesh::{Topology, TriMesh};
 use crate::progress::{Progress, check};
-use crate::solid::Interior;
+use crate::solid::{Interior, Placement};
+use crate::synth::volume::Volume;
 use bands::Bands;
 use bsp::Bsp;
 use sweep::Sweep;
@@ -189,6 +190,34 @@ impl Morph {
             .iter()
             .map(|b| b.exemplar)
             .collect()
+    }
+}
+
+impl Morph {
+    /// The morph sampled into a `voxels`-a-side block over the cube of
+    /// side the box's longest extent from `lo`, with its placement: for
+    /// consumers that need a 3D texture (a GPU cut, an NRRD for other
+    /// tools). Unlike a synthesised block it does not tile: read it inside
+    /// the box only.
+    pub fn block(&self, lo: DVec3, hi: DVec3, voxels: usize) -> Result<(Volume, Placement)> {
+        let scale = (hi - lo).max_element() / voxels as f64;
+        let placement = Placement::new(lo, scale)?;
+        crate::memory::ensure_fits(
+            &format!("a {voxels}^3 morph block"),
+            crate::memory::product(&[voxels as u64, voxels as u64, voxels as u64, 27]),
+        )?;
+        let points: Vec<DVec3> = (0..voxels * voxels * voxels)
+            .map(|i| {
+                let (x, y, z) = (i % voxels, (i / voxels) % voxels, i / (voxels * voxels));
+                lo + DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * scale
+            })
+            .collect();
+        let volume = Volume {
+            size: [voxels; 3],
+            spacing: scale,
+            voxels: self.colours(&points),
+        };
+        Ok((volume, placement))
     }
 }
 

@@ -200,3 +200,43 @@ pub fn read_sections(path: &Path) -> Result<Vec<Exemplar>> {
         })
         .collect()
 }
+
+/// Copy a sections file and its photographs (and masks) into `dir`, the
+/// images renamed `exemplar-K.EXT` (and `exemplar-K-mask.EXT`) beside a
+/// rewritten `sections.toml`: a bake's output then holds everything a
+/// simulator needs to morph the interior. Returns the new file's path.
+pub fn copy_sections(path: &Path, dir: &Path) -> Result<PathBuf> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let file: SectionsFile = toml::from_str(&text).map_err(|e| Error::format(path, e.message()))?;
+    let from = path.parent().unwrap_or(Path::new(""));
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let copy = |src: &Path, name: String| -> Result<String> {
+        let ext = crate::error::extension(src);
+        let name = format!("{name}.{ext}");
+        let src = from.join(src);
+        std::fs::copy(&src, dir.join(&name)).map_err(|e| Error::io(&src, e))?;
+        Ok(name)
+    };
+    let mut out = String::from(
+        "# Photographs of cuts placed as planes in the organ (organtex morph --help).\n",
+    );
+    for (k, e) in file.exemplar.iter().enumerate() {
+        let image = copy(&e.image, format!("exemplar-{}", k + 1))?;
+        let f = |v: [f64; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
+        out += &format!(
+            "\n[[exemplar]]\nimage = {image:?}\norigin = {}\nu = {}\nv = {}\n",
+            f(e.origin),
+            f(e.u),
+            f(e.v)
+        );
+        if let Some(mask) = &e.mask {
+            out += &format!(
+                "mask = {:?}\n",
+                copy(mask, format!("exemplar-{}-mask", k + 1))?
+            );
+        }
+    }
+    let target = dir.join("sections.toml");
+    std::fs::write(&target, out).map_err(|e| Error::io(&target, e))?;
+    Ok(target)
+}

@@ -286,6 +286,35 @@ fn a_broken_mesh_shows_a_message_and_keeps_the_scene() {
     assert_eq!(h.state().doc.as_ref().unwrap().spec.name, name);
 }
 
+/// A scene whose interior is morphed from photographed cuts (seed 003):
+/// the cut plane samples the morph over the node and draws its section,
+/// which shows the photographs' colours.
+#[test]
+fn the_cut_plane_shows_a_morphed_interior() {
+    let mut h = viewer(Some(repo("scenes/myoma_cuts.toml")));
+    settle(&mut h);
+    let before = h.state().read_scene().unwrap();
+    h.state_mut().set_cut(true);
+    settle(&mut h);
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+    assert!(h.state().cut_triangles() > 0, "the section is drawn");
+    let placement = h.state().block_placement().expect("a block on the GPU");
+    let lo = h.state().doc.as_ref().unwrap().closed[0]
+        .0
+        .bounding_box()
+        .unwrap()
+        .0;
+    assert!(
+        (placement.origin - lo).length() < 1e-9,
+        "the morph's block lies on the node's bounds, not tiling from the origin: {placement:?}"
+    );
+    let after = h.state().read_scene().unwrap();
+    assert!(
+        changed_pixels(&before, &after) > 1000,
+        "the section is in the picture"
+    );
+}
+
 /// A GPU error on the viewer's device (here a texture wgpu refuses, as a
 /// driver limit or a lost device would be met) is shown at the top of the
 /// window; the viewer goes on drawing.

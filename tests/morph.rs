@@ -394,6 +394,27 @@ fn the_cli_writes_a_cut_or_nothing() {
     let img = image::open(&cut).unwrap().to_rgba8();
     assert!(img.pixels().filter(|p| p[3] == 255).count() > 10_000);
 
+    // `organtex section --sections` cuts the same morph.
+    let section = dir.path().join("section.png");
+    let (ok, _, stderr) = organtex(&[
+        "section",
+        mesh.to_str().unwrap(),
+        "--sections",
+        sections.to_str().unwrap(),
+        "--plane",
+        "1,0,1,150",
+        "--resolution",
+        "256",
+        "-o",
+        section.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert_eq!(
+        image::open(&section).unwrap().to_rgba8(),
+        img,
+        "organtex section and organtex morph draw the same cut"
+    );
+
     // Bad sections: one message naming the file, nothing written.
     let bad = dir.path().join("bad.toml");
     std::fs::write(

@@ -75,7 +75,8 @@ enum Command {
     /// Write a generated test shape (torus, double torus, cylinder, sphere).
     Generate(generate::Args),
     /// Cut a closed mesh with a plane and texture the section from a solid
-    /// texture block (NRRD): a .png of the section in its plane, or a .glb
+    /// texture block (NRRD), a lapped solid texture or photographed cuts
+    /// (--sections): a .png of the section in its plane, or a .glb
     /// of its triangles. A plane that misses the mesh is an error (exit
     /// status 1) and writes nothing.
     Section(section::Args),

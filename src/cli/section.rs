@@ -1,13 +1,15 @@
-//! `organtex section MESH --block B.nrrd [--lst MODEL.lst] --plane
-//! NX,NY,NZ,D -o CUT.png|.glb`: the section of a closed organ by a plane,
-//! textured from a solid block tiled through space, or from a lapped solid
-//! texture whose exemplar the block is.
+//! `organtex section MESH (--block B.nrrd [--lst MODEL.lst] | --sections
+//! S.toml) --plane NX,NY,NZ,D -o CUT.png|.glb`: the section of a closed
+//! organ by a plane, textured from a solid block tiled through space, from
+//! a lapped solid texture whose exemplar the block is, or morphed from
+//! photographed cuts (seed 003).
 
 use std::path::PathBuf;
 
 use glam::DVec3;
 use organtex::mesh::{Topology, io};
 use organtex::solid::lst::{LstInterior, LstModel};
+use organtex::solid::morph::{Morph, MorphOptions};
 use organtex::solid::{Block, Placement, Plane, plane_section, render_section, section_glb};
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result, memory};
@@ -18,8 +20,12 @@ pub struct Args {
     mesh: PathBuf,
     /// The solid texture: an RGB uint8 NRRD volume, tiled through space
     /// (or, with --lst, the model's exemplar).
-    #[arg(long, value_name = "NRRD")]
-    block: PathBuf,
+    #[arg(long, value_name = "NRRD", required_unless_present = "sections")]
+    block: Option<PathBuf>,
+    /// Colour the section by morphing photographed cuts placed in the mesh
+    /// (a sections file: `organtex morph --help`) instead of a block.
+    #[arg(long, value_name = "TOML", conflicts_with_all = ["block", "lst", "scale"])]
+    sections: Option<PathBuf>,
     /// Colour the section from a lapped solid texture (`organtex lst`).
     #[arg(long, value_name = "LST")]
     lst: Option<PathBuf>,
@@ -83,12 +89,6 @@ pub fn run(args: Args) -> Result<()> {
     };
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
-    // An LST exemplar's depth axis, if its header names one, runs along y.
-    let volume = if args.lst.is_some() {
-        Volume::read_exemplar(&args.block)?
-    } else {
-        Volume::read_nrrd(&args.block)?
-    };
     if let Some(scale) = args.scale
         && !(scale.is_finite() && scale > 0.0)
     {
@@ -96,7 +96,6 @@ pub fn run(args: Args) -> Result<()> {
             "--scale must be a positive scale (object units per voxel), not {scale}"
         )));
     }
-    let placement = Placement::new(args.origin, args.scale.unwrap_or(volume.spacing))?;
 
     let start = std::time::Instant::now();
     let section = plane_section(&mesh, &topology, args.plane).map_err(|e| e.in_file(&args.mesh))?;
@@ -128,20 +127,42 @@ pub fn run(args: Args) -> Result<()> {
             memory::product(&[w as u64, h as u64, 13]),
         )?;
     }
-    let model = args.lst.as_deref().map(LstModel::read).transpose()?;
-    let image = match &model {
-        Some(model) => {
-            let interior = LstInterior::new(model, &volume).map_err(|e| e.in_file(&args.block))?;
-            render_section(&section, &interior, pixels_per_unit)?
+    let image = match (&args.block, &args.sections) {
+        (_, Some(sections)) => {
+            let bars = super::progress::Bars::new();
+            let morph = Morph::read(&mesh, &topology, sections, MorphOptions::default(), &bars)?;
+            bars.finish();
+            render_section(&section, &morph, pixels_per_unit)?
         }
-        None => render_section(
-            &section,
-            &Block {
-                volume: &volume,
-                placement,
-            },
-            pixels_per_unit,
-        )?,
+        (Some(block), None) => {
+            // An LST exemplar's depth axis, if its header names one, runs
+            // along y.
+            let volume = if args.lst.is_some() {
+                Volume::read_exemplar(block)?
+            } else {
+                Volume::read_nrrd(block)?
+            };
+            match args.lst.as_deref().map(LstModel::read).transpose()? {
+                Some(model) => {
+                    let interior =
+                        LstInterior::new(&model, &volume).map_err(|e| e.in_file(block))?;
+                    render_section(&section, &interior, pixels_per_unit)?
+                }
+                None => {
+                    let placement =
+                        Placement::new(args.origin, args.scale.unwrap_or(volume.spacing))?;
+                    render_section(
+                        &section,
+                        &Block {
+                            volume: &volume,
+                            placement,
+                        },
+                        pixels_per_unit,
+                    )?
+                }
+            }
+        }
+        (None, None) => unreachable!("clap requires --block or --sections"),
     };
     if glb {
         let bytes = section_glb(&section, &image)?;

@@ -450,3 +450,42 @@ fn the_cli_writes_a_cut_or_nothing() {
     assert!(!ok && stderr.contains("bad.toml"), "{stderr}");
     assert!(!out.exists());
 }
+
+#[test]
+fn a_curved_cut_is_textured_from_the_morph() {
+    // A ball of radius 30 in the brain's box, across the three exemplar
+    // planes: each triangle's chart shows the morph at the surface point
+    // it maps to, and no chart reads another's texels.
+    let (_, _, morph) = brain();
+    let mut cut = organtex::mesh::shapes::icosphere(3);
+    let centre = DVec3::new(98.0, 116.0, 96.5);
+    for p in &mut cut.positions {
+        *p = centre + *p * 30.0;
+    }
+    let texture = organtex::solid::texture_cut(&cut, &morph, 4.0).unwrap();
+    let (w, h) = (texture.image.width() as f64, texture.image.height() as f64);
+    let mut close = 0;
+    for (t, tri) in cut.triangles.iter().enumerate() {
+        let centroid = tri
+            .iter()
+            .map(|&i| cut.positions[i as usize])
+            .sum::<DVec3>()
+            / 3.0;
+        let uv = (texture.uvs[3 * t] + texture.uvs[3 * t + 1] + texture.uvs[3 * t + 2]) / 3.0;
+        let texel = texture
+            .image
+            .get_pixel((uv.x * w) as u32, (uv.y * h) as u32);
+        assert_eq!(texel[3], 255, "triangle {t}'s centre is covered");
+        let want = morph.colour(centroid);
+        if (0..3).all(|k| texel[k].abs_diff(want[k]) <= 6) {
+            close += 1;
+        }
+    }
+    assert!(
+        close as f64 >= 0.95 * cut.triangles.len() as f64,
+        "{close} of {} triangles show the morph at their centre",
+        cut.triangles.len()
+    );
+    let glb = organtex::solid::cut_glb(&cut, &texture).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+}

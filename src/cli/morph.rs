@@ -1,7 +1,8 @@
 //! `organtex morph MESH --sections S.toml (--plane NX,NY,NZ,D [--resolution
 //! PX] | --grid "O;U;V;W,H") -o CUT.png|.glb [--json]`: the colour inside
 //! an organ morphed from photographs of a few cuts (seed 003), on a plane
-//! section of the mesh or on a grid of points.
+//! section of the mesh, on a grid of points, or on any cut surface
+//! (`--surface CUT.obj -o CUT.glb`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -9,7 +10,9 @@ use std::time::Instant;
 use glam::DVec3;
 use organtex::mesh::{Topology, io};
 use organtex::solid::morph::{Morph, MorphOptions};
-use organtex::solid::{Interior, Plane, plane_section, render_section, section_glb};
+use organtex::solid::{
+    Interior, Plane, cut_glb, plane_section, render_section, section_glb, texture_cut,
+};
 use organtex::{Error, Result, memory};
 
 use super::progress::Bars;
@@ -28,7 +31,8 @@ pub struct Args {
     /// Colour the section of the mesh by the plane N·p = D: a .png in the
     /// plane, transparent outside the section, or a textured .glb.
     #[arg(long, value_name = "NX,NY,NZ,D", value_parser = super::section::parse_plane,
-          allow_hyphen_values = true, conflicts_with = "grid", required_unless_present = "grid")]
+          allow_hyphen_values = true, conflicts_with_all = ["grid", "surface"],
+          required_unless_present_any = ["grid", "surface"])]
     plane: Option<Plane>,
     /// Pixels along the longer side of the section image (with --plane).
     #[arg(long, value_name = "PX", default_value_t = 1024,
@@ -38,15 +42,23 @@ pub struct Args {
     /// 0.5) U + (j + 0.5) V (the sections file's convention), whether
     /// inside the mesh or not.
     #[arg(long, value_name = "OX,OY,OZ;UX,UY,UZ;VX,VY,VZ;W,H", value_parser = parse_grid,
-          allow_hyphen_values = true)]
+          allow_hyphen_values = true, conflicts_with = "surface")]
     grid: Option<Grid>,
+    /// Texture a cut surface the simulator made (any triangle mesh, e.g. a
+    /// curved incision; .obj, .ply or .stl): each triangle laid flat in one
+    /// image, written as a textured .glb.
+    #[arg(long, value_name = "MESH")]
+    surface: Option<PathBuf>,
+    /// Texels per object unit (with --surface).
+    #[arg(long, default_value_t = 4.0)]
+    texels_per_unit: f64,
     /// Blur (photograph pixels) that splits the low band from the detail.
     #[arg(long, default_value_t = MorphOptions::default().low_sigma)]
     low_sigma: f32,
     /// Leave the detail band's local histogram unmatched (seed 003, 5.3).
     #[arg(long)]
     no_matching: bool,
-    /// Output: .png (either mode) or .glb (with --plane).
+    /// Output: .png (--plane or --grid) or .glb (--plane or --surface).
     #[arg(short, long)]
     output: PathBuf,
     /// Print a JSON summary: points, precompute_seconds, seconds and
@@ -102,17 +114,20 @@ fn parse_grid(s: &str) -> std::result::Result<Grid, String> {
 pub fn run(args: Args) -> Result<()> {
     let ext = organtex::error::extension(&args.output);
     let glb = match ext.as_str() {
-        "png" => false,
-        "glb" if args.plane.is_some() => true,
+        "png" if args.surface.is_none() => false,
+        "glb" if args.grid.is_none() => true,
         _ => {
             return Err(Error::invalid(if args.grid.is_some() {
                 "unknown output format (organtex morph --grid writes .png)"
+            } else if args.surface.is_some() {
+                "unknown output format (organtex morph --surface writes .glb)"
             } else {
-                "unknown output format (organtex morph writes .png or .glb)"
+                "unknown output format (organtex morph --plane writes .png or .glb)"
             })
             .in_file(&args.output));
         }
     };
+    let surface = args.surface.as_deref().map(io::read).transpose()?;
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
     let section = match args.plane {
@@ -140,6 +155,23 @@ pub fn run(args: Args) -> Result<()> {
     bars.finish();
 
     let (image, points, seconds) = match (&section, args.grid) {
+        (None, None) => {
+            let cut = surface
+                .as_ref()
+                .expect("clap requires --plane, --grid or --surface");
+            let t = Instant::now();
+            let texture = texture_cut(cut, &morph, args.texels_per_unit)
+                .map_err(|e| e.in_file(args.surface.as_deref().unwrap_or(&args.mesh)))?;
+            let seconds = t.elapsed().as_secs_f64();
+            let bytes = cut_glb(cut, &texture)?;
+            organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;
+            let covered = texture.image.pixels().filter(|p| p[3] == 255).count();
+            (
+                (texture.image.width(), texture.image.height()),
+                covered,
+                seconds,
+            )
+        }
         (Some(section), _) => {
             let (lo, hi) = section.bounds().expect("the section is not empty");
             let extent = (hi - lo).max_element();
@@ -192,7 +224,6 @@ pub fn run(args: Args) -> Result<()> {
             organtex::atomic::write_png(&args.output, &image::DynamicImage::ImageRgb8(img))?;
             ((g.width, g.height), points.len(), seconds)
         }
-        (None, None) => unreachable!("clap requires --plane or --grid"),
     };
     let points_per_second = points as f64 / seconds.max(1e-9);
     if args.json {

@@ -3,9 +3,11 @@
 //! `section` cuts a closed mesh with a plane into a triangulated polygon;
 //! `cut` textures that section, or any cut surface the simulator makes,
 //! from a solid texture block, on the CPU or through the WGSL snippet it
-//! ships for the GPU.
+//! ships for the GPU; `cut_texture` bakes any cut surface's texture from
+//! any `Interior` (block, lapped solid texture, stereology, morph).
 
 pub mod cut;
+pub mod cut_texture;
 pub mod interior;
 pub mod lst;
 pub mod morph;
@@ -16,5 +18,6 @@ pub use cut::{
     Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,
     sample_points, section_glb, texture_coordinates, texture_surface,
 };
+pub use cut_texture::{CutTexture, cut_glb, texture_cut};
 pub use interior::{Block, Interior, InteriorMethod, interior_block};
 pub use section::{Frame, Plane, Section, capped, plane_section};

@@ -69,6 +69,9 @@ python3 tools/compare_uv.py --quick --organtex target/release/organtex
 step "tools/check_bakes.py (every scene baked, Khronos glTF validator, trimesh)"
 python3 tools/check_bakes.py --organtex target/release/organtex
 
+step "tools/compare_morph.py --quick --uterus --check (morph vs nearest slice and cross-fading on a brain MRI; the bundled uterus scene's cuts)"
+python3 tools/compare_morph.py --quick --uterus --check --organtex target/release/organtex
+
 step "tools/compare_tet.py --quick (organtex tetra vs TetGen and fTetWild, files read by meshio)"
 python3 tools/compare_tet.py --quick --organtex target/release/organtex
 

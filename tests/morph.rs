@@ -208,7 +208,10 @@ fn the_same_bytes_on_any_thread_count() {
 /// A sections file in `dir` with one exemplar per `(image, origin, u, v)`;
 /// images named `*.png` that do not exist yet are written as a 32x32 grey
 /// gradient.
-fn sections(dir: &Path, entries: &[(&str, [f64; 3], [f64; 3], [f64; 3])]) -> PathBuf {
+/// An exemplar as written in a sections file: image, origin, u, v.
+type Entry<'a> = (&'a str, [f64; 3], [f64; 3], [f64; 3]);
+
+fn sections(dir: &Path, entries: &[Entry]) -> PathBuf {
     let mut toml = String::new();
     for (image, o, u, v) in entries {
         let path = dir.join(image);
@@ -239,7 +242,7 @@ fn bad_sections_are_refused_by_name() {
     let d = dir.path();
     let cube = io::read(&data("box.obj")).unwrap();
     let (x, y) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-    let cases: Vec<(Vec<(&str, [f64; 3], [f64; 3], [f64; 3])>, &str)> = vec![
+    let cases: Vec<(Vec<Entry>, &str)> = vec![
         (vec![("a.png", [0.0, 0.0, 300.0], x, y)], "outside the mesh"),
         (
             vec![

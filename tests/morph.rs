@@ -356,20 +356,23 @@ fn a_masked_photograph_is_fitted_to_the_mesh() {
 #[test]
 fn the_cli_writes_a_cut_or_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("cut.png");
     let mesh = data("box.obj");
+    // `organtex COMMAND box.obj --sections SECTIONS MODE... -o OUT`.
+    let run = |command: &str, sections: &Path, mode: &[&str], out: &Path| {
+        let mut args = vec![
+            command,
+            mesh.to_str().unwrap(),
+            "--sections",
+            sections.to_str().unwrap(),
+        ];
+        args.extend(mode);
+        args.extend(["-o", out.to_str().unwrap()]);
+        organtex(&args)
+    };
     let sections = data("sections.toml");
-    let (ok, stdout, stderr) = organtex(&[
-        "morph",
-        mesh.to_str().unwrap(),
-        "--sections",
-        sections.to_str().unwrap(),
-        "--grid",
-        "0,0,88.5;1,0,0;0,1,0;197,233",
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
+    let out = dir.path().join("cut.png");
+    let grid = ["--grid", "0,0,88.5;1,0,0;0,1,0;197,233", "--json"];
+    let (ok, stdout, stderr) = run("morph", &sections, &grid, &out);
     assert!(ok, "{stderr}");
     let summary: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(summary["points"], 197 * 233);
@@ -379,79 +382,36 @@ fn the_cli_writes_a_cut_or_nothing() {
     let img = image::open(&out).unwrap().to_rgb8();
     assert_eq!((img.width(), img.height()), (197, 233));
 
-    // A plane section: the plane x + z = 150 cuts the box obliquely.
+    // A plane section (x + z = 150 cuts the box obliquely), by `organtex
+    // morph` and by `organtex section --sections`: the same picture.
+    let plane = ["--plane", "1,0,1,150", "--resolution", "256"];
     let cut = dir.path().join("oblique.png");
-    let (ok, _, stderr) = organtex(&[
-        "morph",
-        mesh.to_str().unwrap(),
-        "--sections",
-        sections.to_str().unwrap(),
-        "--plane",
-        "1,0,1,150",
-        "--resolution",
-        "256",
-        "-o",
-        cut.to_str().unwrap(),
-    ]);
+    let (ok, _, stderr) = run("morph", &sections, &plane, &cut);
     assert!(ok, "{stderr}");
     let img = image::open(&cut).unwrap().to_rgba8();
     assert!(img.pixels().filter(|p| p[3] == 255).count() > 10_000);
-
-    // `organtex section --sections` cuts the same morph.
     let section = dir.path().join("section.png");
-    let (ok, _, stderr) = organtex(&[
-        "section",
-        mesh.to_str().unwrap(),
-        "--sections",
-        sections.to_str().unwrap(),
-        "--plane",
-        "1,0,1,150",
-        "--resolution",
-        "256",
-        "-o",
-        section.to_str().unwrap(),
-    ]);
+    let (ok, _, stderr) = run("section", &sections, &plane, &section);
     assert!(ok, "{stderr}");
-    assert_eq!(
-        image::open(&section).unwrap().to_rgba8(),
-        img,
-        "organtex section and organtex morph draw the same cut"
-    );
+    assert_eq!(image::open(&section).unwrap().to_rgba8(), img);
 
     // Bad sections: one message naming the file, nothing written.
     let bad = dir.path().join("bad.toml");
-    std::fs::write(
-        &bad,
-        "[[exemplar]]\nimage = \"missing.png\"\norigin = [0.0, 0.0, 50.5]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 1.0, 0.0]\n",
-    )
-    .unwrap();
-    let out = dir.path().join("never.png");
-    let (ok, _, stderr) = organtex(&[
-        "morph",
-        mesh.to_str().unwrap(),
-        "--sections",
-        bad.to_str().unwrap(),
-        "--grid",
-        "0,0,88.5;1,0,0;0,1,0;16,16",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!ok && stderr.contains("missing.png"), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(!out.exists());
-    std::fs::write(&bad, "[[exemplar]]\nimage = 3\n").unwrap();
-    let (ok, _, stderr) = organtex(&[
-        "morph",
-        mesh.to_str().unwrap(),
-        "--sections",
-        bad.to_str().unwrap(),
-        "--grid",
-        "0,0,88.5;1,0,0;0,1,0;16,16",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!ok && stderr.contains("bad.toml"), "{stderr}");
-    assert!(!out.exists());
+    let never = dir.path().join("never.png");
+    let small = ["--grid", "0,0,88.5;1,0,0;0,1,0;16,16"];
+    for (text, named) in [
+        (
+            "[[exemplar]]\nimage = \"missing.png\"\norigin = [0.0, 0.0, 50.5]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 1.0, 0.0]\n",
+            "missing.png",
+        ),
+        ("[[exemplar]]\nimage = 3\n", "bad.toml"),
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let (ok, _, stderr) = run("morph", &bad, &small, &never);
+        assert!(!ok && stderr.contains(named), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!never.exists());
+    }
 }
 
 #[test]

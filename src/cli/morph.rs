@@ -10,9 +10,7 @@ use std::time::Instant;
 use glam::DVec3;
 use organtex::mesh::{Topology, io};
 use organtex::solid::morph::{Morph, MorphOptions};
-use organtex::solid::{
-    Interior, Plane, cut_glb, plane_section, render_section, section_glb, texture_cut,
-};
+use organtex::solid::{Interior, Plane, cut_glb, render_section, texture_cut};
 use organtex::{Error, Result, memory};
 
 use super::progress::Bars;
@@ -130,20 +128,10 @@ pub fn run(args: Args) -> Result<()> {
     let surface = args.surface.as_deref().map(io::read).transpose()?;
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
-    let section = match args.plane {
-        Some(plane) => {
-            let section =
-                plane_section(&mesh, &topology, plane).map_err(|e| e.in_file(&args.mesh))?;
-            if section.is_empty() {
-                return Err(Error::invalid(
-                    "the plane misses the mesh: the section is empty, nothing written",
-                )
-                .in_file(&args.mesh));
-            }
-            Some(section)
-        }
-        None => None,
-    };
+    let section = args
+        .plane
+        .map(|plane| super::section::cut(&mesh, &topology, plane, args.resolution, &args.mesh))
+        .transpose()?;
     let options = MorphOptions {
         low_sigma: args.low_sigma,
         matching: !args.no_matching,
@@ -172,37 +160,12 @@ pub fn run(args: Args) -> Result<()> {
                 seconds,
             )
         }
-        (Some(section), _) => {
-            let (lo, hi) = section.bounds().expect("the section is not empty");
-            let extent = (hi - lo).max_element();
-            if !(extent > 0.0 && extent.is_finite()) {
-                return Err(Error::invalid(format!(
-                    "the section spans {extent} units: nothing to draw"
-                ))
-                .in_file(&args.mesh));
-            }
-            let pixels_per_unit = args.resolution as f64 / extent;
-            let [w, h] = ((hi - lo) * pixels_per_unit)
-                .ceil()
-                .max(glam::DVec2::ONE)
-                .to_array();
-            memory::ensure_fits(
-                &format!("a {w}x{h} section image (--resolution)"),
-                memory::product(&[w as u64, h as u64, 13]),
-            )?;
+        (Some((section, pixels_per_unit)), _) => {
             let t = Instant::now();
-            let drawn = render_section(section, &morph, pixels_per_unit)?;
+            let drawn = render_section(section, &morph, *pixels_per_unit)?;
             let seconds = t.elapsed().as_secs_f64();
             let points = drawn.image.width() as usize * drawn.image.height() as usize;
-            if glb {
-                let bytes = section_glb(section, &drawn)?;
-                organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;
-            } else {
-                organtex::atomic::write_png(
-                    &args.output,
-                    &image::DynamicImage::ImageRgba8(drawn.image.clone()),
-                )?;
-            }
+            super::section::write(section, &drawn, &args.output, glb)?;
             ((drawn.image.width(), drawn.image.height()), points, seconds)
         }
         (None, Some(g)) => {

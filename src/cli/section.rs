@@ -4,13 +4,15 @@
 //! a lapped solid texture whose exemplar the block is, or morphed from
 //! photographed cuts (seed 003).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
-use organtex::mesh::{Topology, io};
+use organtex::mesh::{Topology, TriMesh, io};
 use organtex::solid::lst::{LstInterior, LstModel};
 use organtex::solid::morph::{Morph, MorphOptions};
-use organtex::solid::{Block, Placement, Plane, plane_section, render_section, section_glb};
+use organtex::solid::{
+    Block, Placement, Plane, Section, SectionImage, plane_section, render_section, section_glb,
+};
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result, memory};
 
@@ -98,35 +100,8 @@ pub fn run(args: Args) -> Result<()> {
     }
 
     let start = std::time::Instant::now();
-    let section = plane_section(&mesh, &topology, args.plane).map_err(|e| e.in_file(&args.mesh))?;
-    let extent = section
-        .bounds()
-        .map_or(0.0, |(lo, hi)| (hi - lo).max_element());
-    if section.is_empty() || extent <= 0.0 {
-        return Err(Error::invalid(
-            "the plane misses the mesh: the section is empty, nothing written",
-        )
-        .in_file(&args.mesh));
-    }
-    if !extent.is_finite() {
-        return Err(Error::invalid(format!(
-            "the section spans {extent} units: too wide to draw"
-        ))
-        .in_file(&args.mesh));
-    }
-    let pixels_per_unit = args.resolution as f64 / extent;
-    if let Some((lo, hi)) = section.bounds() {
-        let [w, h] = ((hi - lo) * pixels_per_unit)
-            .ceil()
-            .max(glam::DVec2::ONE)
-            .to_array();
-        // The image, its coverage, the copy handed to the encoder and the
-        // encoded bytes: about 13 bytes a pixel.
-        memory::ensure_fits(
-            &format!("a {w}x{h} section image (--resolution)"),
-            memory::product(&[w as u64, h as u64, 13]),
-        )?;
-    }
+    let (section, pixels_per_unit) =
+        cut(&mesh, &topology, args.plane, args.resolution, &args.mesh)?;
     let image = match (&args.block, &args.sections) {
         (_, Some(sections)) => {
             let bars = super::progress::Bars::new();
@@ -164,13 +139,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         (None, None) => unreachable!("clap requires --block or --sections"),
     };
-    if glb {
-        let bytes = section_glb(&section, &image)?;
-        organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;
-    } else {
-        let png = image::DynamicImage::ImageRgba8(image.image.clone());
-        organtex::atomic::write_png(&args.output, &png)?;
-    }
+    write(&section, &image, &args.output, glb)?;
     println!(
         "{}: section of {} boundary loops, {} triangles, area {:.6}, {}x{} pixels, in {:.2} s",
         args.output.display(),
@@ -182,4 +151,66 @@ pub fn run(args: Args) -> Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The section of `mesh` by `plane`, and the pixels per unit that put
+/// `resolution` pixels along its longer side. Refuses a plane that misses
+/// the mesh, a section too wide to draw and an image that would not fit in
+/// memory, naming `path` (the mesh's file).
+pub(super) fn cut(
+    mesh: &TriMesh,
+    topology: &Topology,
+    plane: Plane,
+    resolution: u32,
+    path: &Path,
+) -> Result<(Section, f64)> {
+    let section = plane_section(mesh, topology, plane).map_err(|e| e.in_file(path))?;
+    let extent = section
+        .bounds()
+        .map_or(0.0, |(lo, hi)| (hi - lo).max_element());
+    if section.is_empty() || extent <= 0.0 {
+        return Err(Error::invalid(
+            "the plane misses the mesh: the section is empty, nothing written",
+        )
+        .in_file(path));
+    }
+    if !extent.is_finite() {
+        return Err(Error::invalid(format!(
+            "the section spans {extent} units: too wide to draw"
+        ))
+        .in_file(path));
+    }
+    let pixels_per_unit = resolution as f64 / extent;
+    if let Some((lo, hi)) = section.bounds() {
+        let [w, h] = ((hi - lo) * pixels_per_unit)
+            .ceil()
+            .max(glam::DVec2::ONE)
+            .to_array();
+        // The image, its coverage, the copy handed to the encoder and the
+        // encoded bytes: about 13 bytes a pixel.
+        memory::ensure_fits(
+            &format!("a {w}x{h} section image (--resolution)"),
+            memory::product(&[w as u64, h as u64, 13]),
+        )?;
+    }
+    Ok((section, pixels_per_unit))
+}
+
+/// Write a drawn section: the image (.png) or its triangles textured with
+/// it (.glb).
+pub(super) fn write(
+    section: &Section,
+    image: &SectionImage,
+    output: &Path,
+    glb: bool,
+) -> Result<()> {
+    if glb {
+        let bytes = section_glb(section, image)?;
+        organtex::atomic::write_file(output, |w| w.write_all(&bytes))
+    } else {
+        organtex::atomic::write_png(
+            output,
+            &image::DynamicImage::ImageRgba8(image.image.clone()),
+        )
+    }
 }

@@ -96,28 +96,37 @@ pub(super) fn colour(m: &Morph, p: DVec3) -> [u8; 3] {
         q[s] = acc;
     }
 
-    let mut low = [0.0f32; 3];
-    for s in (0..k).filter(|&s| w[s] > 0.0) {
-        let bands = &m.bands[bounds[s].exemplar];
-        let l = bands.sample(&bands.low, source[s]);
-        for c in 0..3 {
-            low[c] += w[s] as f32 * l[c];
-        }
-    }
+    let low = mix(m, r, &w[..k], &source[..k], |b| &b.low);
     let detail = if m.options.matching {
         matched_detail(m, r, &w[..k], &q[..k])
     } else {
-        let mut d = [0.0f32; 3];
-        for s in (0..k).filter(|&s| w[s] > 0.0) {
-            let bands = &m.bands[bounds[s].exemplar];
-            let x = bands.sample(&bands.detail, q[s]);
-            for c in 0..3 {
-                d[c] += w[s] as f32 * x[c];
-            }
-        }
-        d
+        mix(m, r, &w[..k], &q[..k], |b| &b.detail)
     };
     std::array::from_fn(|c| (low[c] + detail[c]).round().clamp(0.0, 255.0) as u8)
+}
+
+/// The weighted sum of a band of region `r`'s bounds, each sampled at its
+/// own point.
+#[inline]
+fn mix(
+    m: &Morph,
+    r: usize,
+    w: &[f64],
+    at: &[DVec2],
+    band: impl Fn(&super::bands::Bands) -> &[[f32; 3]],
+) -> [f32; 3] {
+    let bounds = &m.bsp.regions[r].bounds;
+    let mut sum = [0.0f32; 3];
+    for (s, (&ws, &q)) in w.iter().zip(at).enumerate() {
+        if ws > 0.0 {
+            let bands = &m.bands[bounds[s].exemplar];
+            let x = bands.sample(band(bands), q);
+            for c in 0..3 {
+                sum[c] += ws as f32 * x[c];
+            }
+        }
+    }
+    sum
 }
 
 fn normalise(w: &mut [f64]) {

@@ -1,5 +1,6 @@
 """organtex from Python: read meshes, unwrap them, synthesise tileable
-textures and solid blocks, cut sections, bake scenes. Arrays are numpy
+textures and solid blocks, cut sections, morph interiors from photographed
+cuts, bake scenes. Arrays are numpy
 arrays in and out; every call releases the GIL while it works, takes an
 optional ``progress(stage, done, total)`` callable, stops on Ctrl-C, and
 raises :class:`OrgantexError` with the library's message (which names the
@@ -20,7 +21,7 @@ import numpy as np
 from . import _core
 from ._core import OrgantexError
 
-__all__ = ["Mesh", "OrgantexError", "read_mesh", "unwrap", "synth", "synth3d", "section",
+__all__ = ["Mesh", "Morph", "OrgantexError", "read_mesh", "unwrap", "synth", "synth3d", "section",
            "tetra", "bake", "check_scene", "manifest"]
 
 Progress = Optional[Callable[[str, int, int], None]]
@@ -126,6 +127,30 @@ def section(vertices, faces, block, plane: Sequence[float], scale: float = 1.0
                             b.shape[0], [float(x) for x in plane[:3]], float(plane[3]), float(scale))
     return (np.frombuffer(v, "<f8").reshape(-1, 3), np.frombuffer(f, "<u4").reshape(-1, 3),
             np.frombuffer(c, np.uint8).reshape(-1, 3))
+
+
+class Morph:
+    """An interior morphed from photographs of a few cuts placed as planes
+    in a closed mesh (seed 003; the sections file as ``organtex morph
+    --help`` describes it): precomputed once, then ``colours(points)`` at
+    any points, on demand."""
+
+    def __init__(self, vertices, faces, sections: Path_, *, progress: Progress = None):
+        self._core = _core.Morph(_f64(vertices, 3, "vertices"), _u32(faces, 3, "faces"), str(sections),
+                                 progress)
+
+    @property
+    def exemplars(self) -> int:
+        return self._core.exemplars
+
+    @property
+    def regions(self) -> int:
+        return self._core.regions
+
+    def colours(self, points) -> np.ndarray:
+        """The colours, (n, 3) uint8, at ``points`` (n, 3)."""
+        rgb = self._core.colours(_f64(points, 3, "points"))
+        return np.frombuffer(rgb, np.uint8).reshape(-1, 3)
 
 
 def tetra(vertices, faces, *, edge_length: Optional[float] = None, cells: Optional[int] = None,

@@ -337,6 +337,69 @@ fn section(
     ))
 }
 
+/// An interior morphed from photographed cuts placed in a closed mesh
+/// (seed 003): precomputed once, then any points coloured on demand.
+#[pyclass(name = "Morph", frozen)]
+struct PyMorph(organtex::solid::morph::Morph);
+
+#[pymethods]
+impl PyMorph {
+    /// Precompute the morph of the sections file `sections` inside the
+    /// closed mesh (vertices f64 bytes n x 3, faces u32 bytes m x 3).
+    #[new]
+    #[pyo3(signature = (vertices, faces, sections, progress=None))]
+    fn new(
+        py: Python<'_>,
+        vertices: &[u8],
+        faces: &[u8],
+        sections: PathBuf,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<PyMorph> {
+        let mesh = mesh_of(vertices, faces)?;
+        let callback = Callback::new(progress);
+        py.detach(|| -> organtex::Result<_> {
+            let topology = organtex::mesh::halfedge::Topology::build(&mesh)?;
+            organtex::solid::morph::Morph::read(
+                &mesh,
+                &topology,
+                &sections,
+                Default::default(),
+                &callback,
+            )
+        })
+        .map(PyMorph)
+        .map_err(error)
+    }
+
+    /// The colours (RGB bytes) at points (f64 bytes, n x 3).
+    fn colours(&self, py: Python<'_>, points: &[u8]) -> PyResult<Py<PyBytes>> {
+        if points.len() % 24 != 0 {
+            return Err(OrgantexError::new_err(
+                "points must be n x 3 float64 values",
+            ));
+        }
+        let points: Vec<DVec3> = f64s(points)
+            .chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect();
+        use organtex::solid::Interior;
+        let colours = py.detach(|| self.0.colours(&points));
+        Ok(bytes_of(py, colours.as_flattened()))
+    }
+
+    /// How many photographs, and how many regions their planes split the
+    /// mesh into.
+    #[getter]
+    fn exemplars(&self) -> usize {
+        self.0.exemplars().len()
+    }
+
+    #[getter]
+    fn regions(&self) -> usize {
+        self.0.regions()
+    }
+}
+
 /// Bake a scene into `out_dir` (scene.glb, report.json, preview.png,
 /// interiors): the report as JSON.
 #[pyfunction]
@@ -421,6 +484,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth, m)?)?;
     m.add_function(wrap_pyfunction!(synth3d, m)?)?;
     m.add_function(wrap_pyfunction!(section, m)?)?;
+    m.add_class::<PyMorph>()?;
     m.add_function(wrap_pyfunction!(bake, m)?)?;
     m.add_function(wrap_pyfunction!(tetra, m)?)?;
     m.add_function(wrap_pyfunction!(check_scene, m)?)?;

@@ -86,3 +86,18 @@ def test_a_bake_is_the_clis_byte_for_byte(root, tmp_path):
     subprocess.run([exe, "bake", root / "scenes/bunny.toml", "-o", tmp_path / "cli"], check=True,
                    capture_output=True)
     assert (tmp_path / "py/scene.glb").read_bytes() == (tmp_path / "cli/scene.glb").read_bytes()
+
+
+def test_a_morph_shows_its_photographs_on_their_planes(root):
+    data = root / "tests/data/morph"
+    box = organtex.read_mesh(data / "box.obj")
+    morph = organtex.Morph(box.vertices, box.faces, data / "sections.toml")
+    assert (morph.exemplars, morph.regions) == (3, 4)
+    photo = np.asarray(Image.open(data / "slice_096.png").convert("L"), dtype=int)
+    h, w = photo.shape
+    j, i = np.mgrid[0:h, 0:w]
+    points = np.stack([i + 0.5, j + 0.5, np.full(i.shape, 96.5)], axis=-1).reshape(-1, 3)
+    rgb = morph.colours(points).reshape(h, w, 3).astype(int)
+    assert np.abs(rgb[3:-3, 3:-3, 0] - photo[3:-3, 3:-3]).max() <= 2
+    with pytest.raises(organtex.OrgantexError, match="box.obj"):
+        organtex.Morph(box.vertices, box.faces, data / "box.obj")

@@ -92,6 +92,16 @@ impl Morph {
                 options.low_sigma
             )));
         }
+        // Per photograph pixel: its colour (12 bytes), both bands (24), the
+        // blur's planes while they are made (16) and the stack (8).
+        let pixels: u64 = exemplars
+            .iter()
+            .map(|e| e.width as u64 * e.height as u64)
+            .sum();
+        crate::memory::ensure_fits(
+            &format!("the morph's bands of {} photographs", exemplars.len()),
+            crate::memory::product(&[pixels, 60]),
+        )?;
         progress.stage("morph: regions", exemplars.len() as u64);
         let bsp = Bsp::build(mesh, topology, &exemplars)?;
         if let Some(r) = bsp.regions.iter().find(|r| r.bounds.len() > MAX_BOUNDS) {

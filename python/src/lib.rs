@@ -373,7 +373,7 @@ impl PyMorph {
 
     /// The colours (RGB bytes) at points (f64 bytes, n x 3).
     fn colours(&self, py: Python<'_>, points: &[u8]) -> PyResult<Py<PyBytes>> {
-        if points.len() % 24 != 0 {
+        if !points.len().is_multiple_of(24) {
             return Err(OrgantexError::new_err(
                 "points must be n x 3 float64 values",
             ));

@@ -1000,4 +1000,22 @@ fn a_scene_interior_can_be_morphed_from_photographed_cuts() {
         "{err}"
     );
     assert!(files_in(&out).is_empty(), "{err}: output written");
+
+    // A morph names its sections; sections go with a morph alone.
+    for (from, to, message) in [
+        (
+            "sections = \"ring/sections.toml\"",
+            "",
+            "interior sections: method = \"morph\" needs sections",
+        ),
+        (
+            "method = \"morph\"",
+            "texture = \"ihc-glands\"",
+            "interior sections: are morphed by method = \"morph\" alone",
+        ),
+        ("ring/sections.toml", "gone.toml", "gone.toml not found"),
+    ] {
+        let (err, _) = bake_error(&body.replace(from, to));
+        assert!(err.contains(message), "{err}");
+    }
 }

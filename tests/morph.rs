@@ -276,6 +276,37 @@ fn bad_sections_are_refused_by_name() {
     let msg = refused(&cube, &path);
     assert!(msg.contains("broken.png"), "{msg}");
 
+    // The arc path: needs its axis, which lies in the plane.
+    let arc = "[[exemplar]]\nimage = \"a.png\"\norigin = [0.0, 0.0, 50.5]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 1.0, 0.0]\n";
+    for (extra, want) in [
+        ("path = \"arc\"\n", "needs axis"),
+        (
+            "axis = [[0.0, 0.0, 50.5], [1.0, 0.0, 0.0]]\n",
+            "for path = \"arc\" alone",
+        ),
+        (
+            "path = \"arc\"\naxis = [[0.0, 0.0, 60.0], [1.0, 0.0, 0.0]]\n",
+            "does not lie in the exemplar's plane",
+        ),
+        ("path = \"spiral\"\n", "unknown variant `spiral`"),
+    ] {
+        let path = d.join("sections.toml");
+        std::fs::write(&path, format!("{arc}{extra}")).unwrap();
+        let msg = refused(&cube, &path);
+        assert!(
+            msg.contains(want) && msg.contains("sections.toml"),
+            "wanted '{want}' in: {msg}"
+        );
+    }
+    let path = d.join("sections.toml");
+    std::fs::write(
+        &path,
+        format!("{arc}path = \"arc\"\naxis = [[0.0, 0.0, 50.5], [1.0, 0.0, 0.0]]\n"),
+    )
+    .unwrap();
+    let topology = Topology::build(&cube).unwrap();
+    assert!(Morph::read(&cube, &topology, &path, MorphOptions::default(), &Silent).is_ok());
+
     // Seed 003, Fig. 2: a subdomain that is not a disk. A torus around z
     // cut by z = 0 gives a ring (a hole); by x = 0, two discs.
     let ring = torus(3.0, 1.0, 48, 24);
@@ -451,4 +482,84 @@ fn a_curved_cut_is_textured_from_the_morph() {
     );
     let glb = organtex::solid::cut_glb(&cut, &texture).unwrap();
     assert_eq!(&glb[..4], b"glTF");
+}
+
+#[test]
+fn a_great_arc_path_keeps_the_distance_to_the_axis() {
+    // Seed 003, 4.2: cuts through a common axis (an orange's segments)
+    // sweep by rotating about it. Two cuts through the z axis of a ball,
+    // each showing rings about the axis: between them the rings stay
+    // rings (the colour depends on the distance to the axis alone), where
+    // straight normal paths would shrink them by cos 45° midway.
+    let mut ball = organtex::mesh::shapes::icosphere(4);
+    for p in &mut ball.positions {
+        *p *= 40.0;
+    }
+    let topology = Topology::build(&ball).unwrap();
+    let ring = |d: f64| 128.0 + 100.0 * (std::f64::consts::TAU * d / 10.0).sin();
+    let (n, s) = (320usize, 0.25);
+    let photo: Vec<[f32; 3]> = (0..n * n)
+        .map(|i| [ring((((i % n) as f64 + 0.5) * s - 40.0).abs()) as f32; 3])
+        .collect();
+    let cut = |origin: DVec3, u: DVec3| {
+        Exemplar::new(
+            "rings.png".into(),
+            n,
+            n,
+            photo.clone(),
+            None,
+            [origin, u * s, DVec3::Z * s],
+        )
+        .unwrap()
+    };
+    let planes = || {
+        [
+            cut(DVec3::new(-40.0, 0.0, -40.0), DVec3::X),
+            cut(DVec3::new(0.0, -40.0, -40.0), DVec3::Y),
+        ]
+    };
+    let arcs: Vec<Exemplar> = planes()
+        .into_iter()
+        .map(|e| e.with_arc(DVec3::ZERO, DVec3::Z).unwrap())
+        .collect();
+    let error = |exemplars: Vec<Exemplar>| {
+        let morph = Morph::new(
+            &ball,
+            &topology,
+            exemplars,
+            MorphOptions::default(),
+            &Silent,
+        )
+        .unwrap();
+        let mut sum = 0.0;
+        let mut count = 0.0;
+        for k in 0..400 {
+            let d = 6.0 + 28.0 * (k % 20) as f64 / 20.0;
+            let angle = -(0.3 + 0.97 * (k / 20) as f64 / 20.0); // -17° to -73°
+            let p = DVec3::new(
+                d * angle.cos(),
+                d * angle.sin(),
+                -10.0 + (k % 7) as f64 * 3.0,
+            );
+            sum += (morph.colour(p)[0] as f64 - ring(d)).abs();
+            count += 1.0;
+        }
+        sum / count
+    };
+    let (arc, straight) = (error(arcs), error(planes().to_vec()));
+    eprintln!("mean error from the rings: arc {arc:.1}, normal {straight:.1}");
+    assert!(
+        arc < 10.0 && straight > 3.0 * arc,
+        "arc {arc:.1}, normal {straight:.1}"
+    );
+
+    // An axis off the plane is refused.
+    let off = planes()[0]
+        .clone()
+        .with_arc(DVec3::new(0.0, 1.0, 0.0), DVec3::Z);
+    assert!(
+        off.unwrap_err()
+            .to_string()
+            .contains("does not lie in the exemplar's plane")
+    );
 }

@@ -22,8 +22,10 @@ pub struct Args {
     mesh: PathBuf,
     /// The sections file (TOML): each `[[exemplar]]` an image, its
     /// placement (origin, u, v: pixel (i, j) is centred at origin +
-    /// (i + 0.5) u + (j + 0.5) v) and an optional tissue mask; the order is
-    /// the order the planes split the organ.
+    /// (i + 0.5) u + (j + 0.5) v), an optional tissue mask and an optional
+    /// `path = "arc"` with `axis = [[x, y, z], [dx, dy, dz]]` in the plane
+    /// (cuts through a common axis sweep by rotating about it); the order
+    /// is the order the planes split the organ.
     #[arg(long, value_name = "TOML")]
     sections: PathBuf,
     /// Colour the section of the mesh by the plane N·p = D: a .png in the

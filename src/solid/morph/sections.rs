@@ -9,7 +9,14 @@
 //! u = [1.0, 0.0, 0.0]         # object-space step of one pixel along a row
 //! v = [0.0, 1.0, 0.0]         # object-space step of one pixel down a column
 //! mask = "cut1_mask.png"      # optional: white where the photograph shows tissue
+//! path = "arc"                # optional: "normal" (default) or "arc"
+//! axis = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]  # with "arc": a point and a direction in the plane
 //! ```
+//!
+//! `path` is how the plane sweeps through the organ to reach a point (seed
+//! 003, 4.2): along its normal, or rotating about an axis in the plane (a
+//! great arc, for cuts through a common axis: segments of an orange, a
+//! fibroid halved twice through its stalk).
 //!
 //! Pixel (i, j) is centred at origin + (i + 0.5) u + (j + 0.5) v. Within
 //! this module a plane point is named by its *pixel coordinates* (a, b):
@@ -38,6 +45,27 @@ struct Entry {
     u: [f64; 3],
     v: [f64; 3],
     mask: Option<PathBuf>,
+    #[serde(default)]
+    path: PathKind,
+    axis: Option<[[f64; 3]; 2]>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum PathKind {
+    #[default]
+    Normal,
+    Arc,
+}
+
+/// How an exemplar plane sweeps through the organ (seed 003, 4.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SweepPath {
+    /// Along its normal (straight path lines).
+    Normal,
+    /// Rotating about the axis through `point` along unit `direction`,
+    /// both in the plane (great arcs about it).
+    Arc { point: DVec3, direction: DVec3 },
 }
 
 /// A photograph of a cut, placed in object space.
@@ -58,6 +86,8 @@ pub struct Exemplar {
     pub normal: DVec3,
     /// `normal . origin`: the plane is `normal . p = offset`.
     pub offset: f64,
+    /// How the plane sweeps to reach a point.
+    pub path: SweepPath,
     /// The dual basis of (u, v) in the plane: `(p - origin) . du` is a.
     du: DVec3,
     dv: DVec3,
@@ -104,9 +134,32 @@ impl Exemplar {
             v,
             normal,
             offset: normal.dot(origin),
+            path: SweepPath::Normal,
             du,
             dv,
         })
+    }
+
+    /// Sweep by rotating about the axis through `point` along `direction`
+    /// (seed 003's great arc); refuses an axis that does not lie in the
+    /// plane.
+    pub fn with_arc(mut self, point: DVec3, direction: DVec3) -> Result<Exemplar> {
+        let scale = self.u.length().max(self.v.length());
+        if !(point.is_finite() && direction.is_finite()) || direction.length() == 0.0 {
+            return Err(Error::invalid(format!(
+                "the arc's axis needs a point and a non-zero direction, not {point} and {direction}"
+            )));
+        }
+        let direction = direction.normalize();
+        if direction.dot(self.normal).abs() > 1e-6
+            || self.height(point).abs() > 1e-6 * scale.max(1.0)
+        {
+            return Err(Error::invalid(format!(
+                "the arc's axis (through {point} along {direction}) does not lie in the exemplar's plane"
+            )));
+        }
+        self.path = SweepPath::Arc { point, direction };
+        Ok(self)
     }
 
     /// Pixel coordinates of `p`'s projection onto the plane along its
@@ -193,7 +246,22 @@ pub fn read_sections(path: &Path) -> Result<Vec<Exemplar>> {
                 None => None,
             };
             let [origin, u, v] = [entry.origin, entry.u, entry.v].map(DVec3::from_array);
-            Exemplar::new(image_path, w, h, rgb, mask, [origin, u, v]).map_err(|e| match e {
+            let exemplar = Exemplar::new(image_path, w, h, rgb, mask, [origin, u, v]);
+            let exemplar = match (entry.path, entry.axis) {
+                (PathKind::Normal, None) => exemplar,
+                (PathKind::Arc, Some([p, d])) => {
+                    exemplar.and_then(|e| e.with_arc(DVec3::from_array(p), DVec3::from_array(d)))
+                }
+                (PathKind::Arc, None) => {
+                    return Err(at(
+                        "path = \"arc\" needs axis = [[x, y, z], [dx, dy, dz]]".into()
+                    ));
+                }
+                (PathKind::Normal, Some(_)) => {
+                    return Err(at("axis is for path = \"arc\" alone".into()));
+                }
+            };
+            exemplar.map_err(|e| match e {
                 Error::Invalid { msg, .. } => at(msg),
                 e => e,
             })

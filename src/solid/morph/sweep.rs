@@ -13,6 +13,10 @@
 //! outline (the outermost boundary distance in `ANGLES` directions); a
 //! point interpolates between two heights and two directions.
 //!
+//! An exemplar may instead sweep by rotating about an axis in its plane
+//! (4.2's great arc): a point is turned about the axis onto the plane, its
+//! distance to the axis kept; the arc it swept is its height.
+//!
 //! With a mask, the photograph is fitted to the mesh (4.3): the section's
 //! outline maps onto the outline of the masked tissue, radially from the
 //! barycentres, so the image boundary lies on the mesh boundary and the
@@ -23,7 +27,7 @@ use glam::{DVec2, DVec3};
 
 use super::bsp::Side;
 use super::cells::Cells;
-use super::sections::Exemplar;
+use super::sections::{Exemplar, SweepPath};
 use crate::error::Result;
 use crate::mesh::{Topology, TriMesh};
 
@@ -124,10 +128,31 @@ impl Sweep {
     /// coordinates, and `p`'s height above the exemplar plane.
     #[inline]
     pub fn source(&self, e: &Exemplar, p: DVec3) -> (f64, DVec2) {
-        let t = e.height(p);
-        let ab = e.pixel_coords(p);
+        if let SweepPath::Arc { point, direction } = e.path {
+            // Rotate p about the axis onto the nearer half of the plane:
+            // its distance to the axis is kept, and its height above the
+            // plane is the arc it swept (signed as the BSP sides it).
+            let q = p - point;
+            let along = q.dot(direction);
+            let radial = q - direction * along;
+            let across = e.normal.cross(direction);
+            let (x, y) = (radial.dot(across), radial.dot(e.normal));
+            let r = radial.length();
+            let on_plane = point + direction * along + across * (r * x.signum());
+            let t = y.atan2(x.abs()) * r;
+            let ab = e.pixel_coords(on_plane);
+            return (t, self.fitted(ab, 0.0));
+        }
+        (e.height(p), self.fitted(e.pixel_coords(p), e.height(p)))
+    }
+
+    /// The image point of the plane point `ab` swept `t` along the normal:
+    /// the ratio of its distance to the swept section's outline kept, and
+    /// the section fitted to the mask's outline (4.3) if there is one.
+    #[inline]
+    fn fitted(&self, ab: DVec2, t: f64) -> DVec2 {
         if t == 0.0 && self.fit.is_none() {
-            return (t, ab);
+            return ab;
         }
         let x = (t / self.dt + HALF_LEVELS as f64).clamp(0.0, (2 * HALF_LEVELS) as f64);
         let k = (x as usize).min(2 * HALF_LEVELS - 1);
@@ -137,7 +162,7 @@ impl Sweep {
         let rel = ab - centre;
         let r = rel.length();
         if r == 0.0 {
-            return (t, self.target().centre);
+            return self.target().centre;
         }
         let s = (rel.y.atan2(rel.x) / std::f64::consts::TAU).rem_euclid(1.0) * ANGLES as f64;
         let swept = lerp(radius(l0, s), radius(l1, s), f);
@@ -147,7 +172,7 @@ impl Sweep {
             1.0
         };
         let target = self.target();
-        (t, target.centre + rel * (rho * radius(target, s) / r))
+        target.centre + rel * (rho * radius(target, s) / r)
     }
 
     /// The outline a swept point lands on: the masked tissue's, or the

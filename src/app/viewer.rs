@@ -75,8 +75,8 @@ type Thumbnails = Vec<(String, String, Option<egui::ColorImage>)>;
 /// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
 /// laid as the bake lays it, the block as exemplar).
 /// Voxels a side of the block a morphed interior is sampled into for the
-/// cut plane (96^3 points: about 0.2 s on 2 cores).
-const MORPH_VOXELS: usize = 96;
+/// cut plane (128^3 points: about 0.4 s on 2 cores).
+const MORPH_VOXELS: usize = 128;
 
 struct Interiors {
     block: Volume,

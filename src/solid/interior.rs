@@ -1,7 +1,9 @@
 //! The colour inside an organ, whatever model makes it: `Interior` is
-//! what sections, the bake, the viewer's cut plane and the simulator's
-//! runtime call. A tiling block placed in space (`Block`) and a lapped
-//! solid texture (`lst::LstInterior`) are two models of it.
+//! what sections (`render_section`), cut surfaces (`texture_cut`), the
+//! bake, the viewer's cut plane and the simulator's runtime call. A tiling
+//! block placed in space (`Block`, which stereology's particles also fill),
+//! a lapped solid texture (`lst::LstInterior`) and photographed cuts
+//! morphed on demand (`morph::Morph`) are its models.
 //!
 //! `interior_block` makes a block from a tissue: the tissue's tileable
 //! colour texture, brought down to twice the block's side (a block copies

@@ -333,35 +333,36 @@ fn a_masked_photograph_is_fitted_to_the_mesh() {
     let mesh = io::read(&data("box.obj")).unwrap();
     let topology = Topology::build(&mesh).unwrap();
     let (w, h) = (197, 233);
+    // A disc of tissue (a green rim round a red centre) on blue that the
+    // mask hides.
+    let disc = |z: f64, centre: DVec2, radius: f64| {
+        let from = |i: usize| (DVec2::new((i % w) as f64, (i / w) as f64) - centre).length();
+        let rgb: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| match from(i) {
+                d if d >= radius => [0.0, 0.0, 255.0],
+                d if d > radius - 6.0 => [0.0, 255.0, 0.0],
+                _ => [200.0, 60.0, 60.0],
+            })
+            .collect();
+        let mask: Vec<bool> = (0..w * h).map(|i| from(i) < radius).collect();
+        let place = [DVec3::new(0.0, 0.0, z), DVec3::X, DVec3::Y];
+        Exemplar::new("disc.png".into(), w, h, rgb, Some(mask), place).unwrap()
+    };
     let centre = DVec2::new(98.0, 116.0);
-    let inside = |x: usize, y: usize| (DVec2::new(x as f64, y as f64) - centre).length() < 60.0;
-    let rgb: Vec<[f32; 3]> = (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            if !inside(x, y) {
-                [0.0, 0.0, 255.0]
-            } else if (DVec2::new(x as f64, y as f64) - centre).length() > 54.0 {
-                [0.0, 255.0, 0.0]
-            } else {
-                [200.0, 60.0, 60.0]
-            }
-        })
-        .collect();
-    let mask: Vec<bool> = (0..w * h).map(|i| inside(i % w, i / w)).collect();
-    let place = |z: f64| [DVec3::new(0.0, 0.0, z), DVec3::X, DVec3::Y];
-    let exemplar = Exemplar::new("disc.png".into(), w, h, rgb, Some(mask), place(96.5)).unwrap();
+    let plane = |z: f64| -> Vec<DVec3> {
+        (0..w * h)
+            .map(|i| DVec3::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5, z))
+            .collect()
+    };
     let morph = Morph::new(
         &mesh,
         &topology,
-        vec![exemplar],
+        vec![disc(96.5, centre, 60.0)],
         MorphOptions::default(),
         &Silent,
     )
     .unwrap();
-    let points: Vec<DVec3> = (0..w * h)
-        .map(|i| DVec3::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5, 96.5))
-        .collect();
-    let colours = morph.colours(&points);
+    let colours = morph.colours(&plane(96.5));
     let blue = colours.iter().filter(|c| c[2] > 128).count();
     assert_eq!(blue, 0, "{blue} points show what the mask hides");
     // The rim of the box's section (its outer ring of pixels) shows the
@@ -382,6 +383,29 @@ fn a_masked_photograph_is_fitted_to_the_mesh() {
     );
     let mid = colours[116 * w + 98];
     assert!(mid[0] > 150 && mid[1] < 110, "the centre shows {mid:?}");
+
+    // Two such photographs, discs of other sizes in other places: between
+    // their planes the morph shows tissue alone, and the warp between them
+    // maps disc onto disc (the box's centre shows both discs' centres).
+    let morph = Morph::new(
+        &mesh,
+        &topology,
+        vec![
+            disc(80.5, DVec2::new(70.0, 90.0), 45.0),
+            disc(112.5, DVec2::new(120.0, 140.0), 70.0),
+        ],
+        MorphOptions::default(),
+        &Silent,
+    )
+    .unwrap();
+    for z in [84.0, 96.5, 108.0] {
+        let blue = morph
+            .colours(&plane(z))
+            .iter()
+            .filter(|c| c[2] > 128)
+            .count();
+        assert_eq!(blue, 0, "z {z}: {blue} points show what the masks hide");
+    }
 }
 
 #[test]

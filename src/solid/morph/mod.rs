@@ -146,9 +146,9 @@ impl Morph {
                         let (a, b) = (&region.bounds[s], &region.bounds[t]);
                         let warp = Warp::matched(
                             &stacks[a.exemplar],
-                            extent(&a.cells),
+                            extent(&a.cells, &sweeps[a.exemplar]),
                             &stacks[b.exemplar],
-                            extent(&b.cells),
+                            extent(&b.cells, &sweeps[b.exemplar]),
                         );
                         progress.advance(1);
                         Ok(Some(warp))
@@ -231,9 +231,11 @@ impl Morph {
     }
 }
 
-/// Bounds of a subdomain in its exemplar's pixel coordinates.
-fn extent(cells: &cells::Cells) -> (glam::DVec2, glam::DVec2) {
-    cells.centres().fold(
+/// Bounds of a subdomain in its photograph's pixel coordinates: where its
+/// plane points land once the photograph is fitted to the mesh (the warps
+/// and the source points both live there).
+fn extent(cells: &cells::Cells, sweep: &Sweep) -> (glam::DVec2, glam::DVec2) {
+    cells.centres().map(|c| sweep.fitted(c, 0.0)).fold(
         (glam::DVec2::INFINITY, glam::DVec2::NEG_INFINITY),
         |(lo, hi), c| (lo.min(c), hi.max(c)),
     )

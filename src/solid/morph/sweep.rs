@@ -150,7 +150,7 @@ impl Sweep {
     /// the ratio of its distance to the swept section's outline kept, and
     /// the section fitted to the mask's outline (4.3) if there is one.
     #[inline]
-    fn fitted(&self, ab: DVec2, t: f64) -> DVec2 {
+    pub fn fitted(&self, ab: DVec2, t: f64) -> DVec2 {
         if t == 0.0 && self.fit.is_none() {
             return ab;
         }

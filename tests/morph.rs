@@ -467,6 +467,24 @@ fn the_cli_writes_a_cut_or_nothing() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(!never.exists());
     }
+    // An open mesh has no inside to fill: named, nothing written.
+    let open = dir.path().join("open.obj");
+    std::fs::write(&open, "v 0 0 0\nv 100 0 0\nv 0 100 100\nf 1 2 3\n").unwrap();
+    let (ok, _, stderr) = organtex(&[
+        "morph",
+        open.to_str().unwrap(),
+        "--sections",
+        sections.to_str().unwrap(),
+        small[0],
+        small[1],
+        "-o",
+        never.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("open.obj") && stderr.contains("not closed"),
+        "{stderr}"
+    );
+    assert!(!never.exists());
 }
 
 #[test]

@@ -130,6 +130,7 @@ pub fn run(args: Args) -> Result<()> {
     let surface = args.surface.as_deref().map(io::read).transpose()?;
     let mesh = io::read(&args.mesh)?;
     let topology = Topology::build(&mesh).map_err(|e| e.in_file(&args.mesh))?;
+    Morph::check_mesh(&topology).map_err(|e| e.in_file(&args.mesh))?;
     let section = args
         .plane
         .map(|plane| super::section::cut(&mesh, &topology, plane, args.resolution, &args.mesh))

@@ -86,6 +86,7 @@ impl Morph {
         options: MorphOptions,
         progress: &dyn Progress,
     ) -> Result<Morph> {
+        Morph::check_mesh(topology)?;
         if !(options.low_sigma > 0.0 && options.low_sigma.is_finite()) {
             return Err(Error::invalid(format!(
                 "the low band's blur must be positive, not {}",
@@ -166,8 +167,20 @@ impl Morph {
         })
     }
 
+    /// Refuse a mesh that is not closed: its inside, the morph's domain, is
+    /// not defined.
+    pub fn check_mesh(topology: &Topology) -> Result<()> {
+        let open = topology.boundary_loops().len();
+        if open > 0 {
+            return Err(Error::invalid(format!(
+                "the mesh is not closed ({open} boundary loops): a morph fills a closed organ"
+            )));
+        }
+        Ok(())
+    }
+
     /// Read the sections file at `path` and precompute its morph in `mesh`;
-    /// errors name the file.
+    /// errors about the sections name the file.
     pub fn read(
         mesh: &TriMesh,
         topology: &Topology,
@@ -175,6 +188,7 @@ impl Morph {
         options: MorphOptions,
         progress: &dyn Progress,
     ) -> Result<Morph> {
+        Morph::check_mesh(topology)?;
         let exemplars = read_sections(path)?;
         Morph::new(mesh, topology, exemplars, options, progress).map_err(|e| e.in_file(path))
     }

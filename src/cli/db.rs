@@ -37,8 +37,8 @@ pub fn run(args: Args) -> Result<()> {
     match args.command {
         DbCommand::List => {
             println!(
-                "{:<16}{:<40}{:<18}{:<24}built",
-                "id", "name", "kind", "outputs"
+                "{:<20}{:<46}{:<20}{:<24}{:<16}built",
+                "id", "name", "kind", "outputs", "licence"
             );
             for t in &db.tissues {
                 let outputs: Vec<String> = t
@@ -51,11 +51,12 @@ pub fn run(args: Args) -> Result<()> {
                     .iter()
                     .all(|&o| db.output_path(&t.id, o).is_file());
                 println!(
-                    "{:<16}{:<40}{:<18}{:<24}{}",
+                    "{:<20}{:<46}{:<20}{:<24}{:<16}{}",
                     t.id,
                     t.name,
                     t.kind,
                     outputs.join(", "),
+                    t.licence.as_deref().unwrap_or("see LICENSES.md"),
                     if built { "yes" } else { "no" }
                 );
             }

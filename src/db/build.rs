@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::index::{Database, Output, Tissue};
+use super::index::{Database, Lighting, Output, Tissue};
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{CancelOnly, Progress, check};
@@ -15,7 +15,7 @@ use crate::synth::exemplar::Exemplar;
 use crate::synth::fnpts::{SynthOptions, synthesize};
 use crate::synth::height::{exemplar_height, synthesis_height};
 use crate::synth::quality::{Quality, Rgb, measure};
-use crate::synth::{mask, vessel_tree, vessels};
+use crate::synth::{lighting, mask, vessel_tree, vessels};
 
 /// Bump when a change to synthesis, height maps or overlays changes what
 /// `build` writes for the same entry: outputs built under another recipe
@@ -30,7 +30,20 @@ pub struct Built {
     pub outputs: Vec<Output>,
     pub usable_pixels: usize,
     pub quality: Option<Quality>,
+    /// How even the lighting is, when a colour texture is built.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<LightingReport>,
     pub seconds: f64,
+}
+
+/// The lighting's unevenness: the deviation of the luminance blurred with
+/// σ an eighth of the crop's shorter side, in levels of 255, in the source
+/// crop and in the output tile (`synth::lighting::spread`).
+#[derive(Clone, Debug, Serialize)]
+pub struct LightingReport {
+    pub flattened: bool,
+    pub spread_before: f64,
+    pub spread_after: f64,
 }
 
 /// A digest of everything an entry's outputs depend on: the recipe, the
@@ -73,8 +86,18 @@ pub fn is_current(db: &Database, t: &Tissue) -> Result<bool> {
     Ok(outputs && built.fingerprint == fingerprint(db, t)?)
 }
 
-/// The exemplar an entry synthesises from: its source, cropped and masked.
+/// The exemplar an entry synthesises from: its source, cropped and masked,
+/// its lighting flattened when the entry asks (`lighting = "flatten"`).
 pub fn exemplar(db: &Database, t: &Tissue) -> Result<Exemplar> {
+    let mut ex = masked_source(db, t)?;
+    if t.lighting == Lighting::Flatten {
+        lighting::flatten(&mut ex);
+    }
+    Ok(ex)
+}
+
+/// The entry's source, cropped and masked, as photographed.
+fn masked_source(db: &Database, t: &Tissue) -> Result<Exemplar> {
     let source = db.root.join(&t.source);
     let mask = t.mask.as_ref().map(|m| db.root.join(m));
     let mut ex = Exemplar::load(&source, mask.as_deref(), t.crop)?;
@@ -108,7 +131,19 @@ pub fn build(db: &Database, ids: &[String], progress: &dyn Progress) -> Result<V
 
 fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built> {
     let start = Instant::now();
-    let ex = exemplar(db, t)?;
+    let source = masked_source(db, t)?;
+    let sigma = lighting::sigma_for(source.width.min(source.height));
+    let spread_before = lighting::spread(
+        &source.pixels,
+        &source.valid,
+        source.width,
+        source.height,
+        sigma,
+    );
+    let mut ex = source;
+    if t.lighting == Lighting::Flatten {
+        lighting::flatten(&mut ex);
+    }
     // Everything that can be refused is checked, and the synthesis done,
     // before the entry's folder is made: a refused entry leaves nothing.
     let synthesised = match t
@@ -142,6 +177,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
     let dir = db.root.join("build").join(&t.id);
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let mut quality = None;
+    let mut lit = None;
     if let Some(s) = &synthesised {
         if t.outputs.contains(&Output::Colour) {
             let raw = s.pixels.iter().flatten().copied().collect();
@@ -153,6 +189,17 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
                 &dir.join(Output::Colour.file_name()),
                 &image::DynamicImage::ImageRgb8(img),
             )?;
+            lit = Some(LightingReport {
+                flattened: t.lighting == Lighting::Flatten,
+                spread_before,
+                spread_after: lighting::spread(
+                    &s.pixels,
+                    &vec![true; s.pixels.len()],
+                    s.width,
+                    s.height,
+                    sigma,
+                ),
+            });
             quality = Some(measure(
                 &ex,
                 &Rgb {
@@ -203,6 +250,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
         outputs: t.outputs.clone(),
         usable_pixels: ex.valid.iter().filter(|&&v| v).count(),
         quality,
+        lighting: lit,
         seconds: start.elapsed().as_secs_f64(),
     };
     // Plain fields with string keys: serialising cannot fail.

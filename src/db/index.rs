@@ -11,6 +11,9 @@
 //! crop = { x = 250, y = 250, width = 900, height = 900 }   # optional
 //! mask = "masks/x.png"              # optional: white usable
 //! mask_rules = ["dark", "bright", "vessels"]              # optional
+//! lighting = "flatten"              # optional: divide out uneven lighting
+//! licence = "CC BY 4.0"             # optional: the source's licence
+//! credit = "..."                    # optional: its credit line
 //! outputs = ["colour", "height"]    # colour, height, overlay
 //!                                   # (overlay: a tileable vessel tree
 //!                                   # in the photo's vessel colour and
@@ -103,6 +106,26 @@ pub struct Tissue {
     pub outputs: Vec<Output>,
     #[serde(default)]
     pub synthesis: Option<SynthesisParams>,
+    /// "flatten": divide out uneven lighting (an endoscope's cone of
+    /// light) before synthesis, `synth::lighting`; "keep" (the default)
+    /// leaves it.
+    #[serde(default)]
+    pub lighting: Lighting,
+    /// The source's licence ("CC BY 4.0", "BSD-3-Clause", ...), as
+    /// `sources/LICENSES.md` records it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub licence: Option<String>,
+    /// The credit line the licence asks for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub credit: Option<String>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Lighting {
+    #[default]
+    Keep,
+    Flatten,
 }
 
 /// A database: its folder and entries.

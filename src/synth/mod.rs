@@ -7,6 +7,7 @@ pub mod exemplar;
 pub mod filter;
 pub mod fnpts;
 pub mod height;
+pub mod lighting;
 pub mod mask;
 pub mod quality;
 pub mod sweep;

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use organtex::db::build::is_current;
+use organtex::db::index::Lighting;
 use organtex::db::{Database, Output, build};
 use organtex::progress::Silent;
 
@@ -80,4 +81,50 @@ seed = 3
     std::fs::write(&index, text).unwrap();
     std::fs::remove_file(db.output_path("small", Output::Height)).unwrap();
     assert!(!is_current(&db, small).unwrap(), "an output is missing");
+}
+
+#[test]
+fn every_endoscope_frame_entry_has_its_lighting_flattened() {
+    // Issue 28: an entry whose lighting is flattened leaves at most half
+    // the lighting's unevenness in its tile (`report.json` lighting), and
+    // every shipped real entry names its licence and credit line.
+    let shipped_db = Database::open(&shipped()).unwrap();
+    let frames: Vec<_> = shipped_db
+        .tissues
+        .iter()
+        .filter(|t| t.lighting == Lighting::Flatten && t.outputs.contains(&Output::Colour))
+        .collect();
+    assert!(frames.len() >= 3, "{} flattened frames", frames.len());
+    for t in frames {
+        let dir = tempfile::tempdir().unwrap();
+        let source = dir.path().join(&t.source);
+        std::fs::create_dir_all(source.parent().unwrap()).unwrap();
+        std::fs::copy(shipped().join(&t.source), &source).unwrap();
+        let mut entry = t.clone();
+        let synthesis = entry.synthesis.as_mut().unwrap();
+        (synthesis.width, synthesis.height) = (192, 192);
+        #[derive(serde::Serialize)]
+        struct Index {
+            tissue: Vec<organtex::db::Tissue>,
+        }
+        let index = Index {
+            tissue: vec![entry],
+        };
+        std::fs::write(
+            dir.path().join("index.toml"),
+            toml::to_string(&index).unwrap(),
+        )
+        .unwrap();
+        let db = Database::open(dir.path()).unwrap();
+        let built = build(&db, &[], &Silent).unwrap();
+        let lit = built[0].lighting.as_ref().expect("a lighting report");
+        assert!(
+            lit.flattened && lit.spread_after <= 0.5 * lit.spread_before,
+            "{}: spread {:.2} -> {:.2}",
+            t.id,
+            lit.spread_before,
+            lit.spread_after
+        );
+        assert!(t.licence.is_some() && t.credit.is_some(), "{}", t.id);
+    }
 }

@@ -289,9 +289,13 @@ pub fn workloads() -> Vec<Workload> {
 }
 
 /// Synthesise `output` pixels square from the top left `input` square of
-/// the database's gravel photograph.
+/// the gravel photograph of tests/data/textures.
 fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
-    let gravel = root.join("database").join("sources").join("gravel.png");
+    let gravel = root
+        .join("tests")
+        .join("data")
+        .join("textures")
+        .join("gravel.png");
     let crop = Crop {
         x: 0,
         y: 0,
@@ -311,9 +315,13 @@ fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
 }
 
 /// Synthesise a block `side` voxels a side from the top left `side`
-/// square of the database's gravel photograph.
+/// square of the gravel photograph of tests/data/textures.
 fn synth3d_step(root: &Path, side: usize) -> Result<Step> {
-    let gravel = root.join("database").join("sources").join("gravel.png");
+    let gravel = root
+        .join("tests")
+        .join("data")
+        .join("textures")
+        .join("gravel.png");
     let crop = Crop {
         x: 0,
         y: 0,

@@ -369,7 +369,7 @@ fn unwrap_gives_the_same_bytes_on_one_or_two_threads() {
 fn synthesis_refuses_bad_input_clearly_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let d = |name: &str| dir.path().join(name);
-    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/textures/gravel.png");
     let g = gravel.to_str().unwrap();
     let out = d("out.png");
     let o = out.to_str().unwrap();
@@ -491,7 +491,7 @@ fn bake_refuses_bad_scenes_clearly_and_writes_nothing() {
     let scene = dir.path().join("scene.toml");
     let write =
         |body: &str| std::fs::write(&scene, format!("database = {database:?}\n{body}")).unwrap();
-    let node = "[[node]]\nname = \"organ\"\nmesh = { file = \"organ.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
+    let node = "[[node]]\nname = \"organ\"\nmesh = { file = \"organ.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"colon-mucosa\"\n";
 
     write(node);
     check_refused(
@@ -505,7 +505,7 @@ fn bake_refuses_bad_scenes_clearly_and_writes_nothing() {
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     )
     .unwrap();
-    write(&node.replace("gravel", "granite"));
+    write(&node.replace("colon-mucosa", "granite"));
     check_refused(
         "unknown tissue",
         &scene,
@@ -764,7 +764,7 @@ fn jpeg_claiming(w: u16, h: u16) -> Vec<u8> {
 fn bad_exemplar_images_are_refused_clearly_and_write_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let d = |name: &str| dir.path().join(name);
-    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/textures/gravel.png");
     let g = gravel.to_str().unwrap();
     let s = |p: &Path| p.to_str().unwrap().to_string();
 
@@ -991,7 +991,7 @@ fn sixteen_bit_and_grey_alpha_exemplars_are_converted() {
 fn out_of_range_numbers_on_the_command_line_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let data = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let gravel = data.join("database/sources/gravel.png");
+    let gravel = data.join("tests/data/textures/gravel.png");
     let cube = data.join("tests/data/cube.obj");
     let scene = data.join("scenes/bunny.toml");
     let (g, c, sc) = (
@@ -1116,13 +1116,13 @@ fn out_of_range_numbers_in_a_scene_are_refused_at_their_line() {
     let base = format!(
         "database = {database:?}\n[[camera]]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
          fov = 60.0\n[[node]]\nname = \"organ\"\nmesh = {{ file = \"organ.obj\" }}\n[[node.facet]]\n\
-         name = \"*\"\ntexture = \"gravel\"\n[node.interior]\ntexture = \"gravel\"\nblock_size = 5.0\n\
+         name = \"*\"\ntexture = \"colon-mucosa\"\n[node.interior]\ntexture = \"colon-mucosa\"\nblock_size = 5.0\n\
          [bake]\nviews = 8\ninterior_voxels = 16\n"
     );
     let facet = |key: &str, v: &str| {
         base.replace(
-            "texture = \"gravel\"\n[node",
-            &format!("texture = \"gravel\"\n{key} = {v}\n[node"),
+            "texture = \"colon-mucosa\"\n[node",
+            &format!("texture = \"colon-mucosa\"\n{key} = {v}\n[node"),
         )
     };
     let mut cases: Vec<(String, String)> = Vec::new();
@@ -1445,7 +1445,7 @@ fn bad_nrrd_blocks_are_refused_clearly_and_slicer_files_are_read() {
 fn work_too_large_for_memory_is_refused_before_allocating() {
     let dir = tempfile::tempdir().unwrap();
     let d = |name: &str| dir.path().join(name);
-    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database/sources/gravel.png");
+    let gravel = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/textures/gravel.png");
     let g = gravel.to_str().unwrap();
     let s = |p: &Path| p.to_str().unwrap().to_string();
 
@@ -1557,7 +1557,7 @@ fn work_too_large_for_memory_is_refused_before_allocating() {
         &scene,
         format!(
             "database = {database:?}\n[[node]]\nname = \"organ\"\nmesh = {{ file = \"organ.obj\" }}\n\
-             [node.interior]\ntexture = \"gravel\"\nmethod = \"optimize\"\n[bake]\ninterior_voxels = 256\n"
+             [node.interior]\ntexture = \"colon-mucosa\"\nmethod = \"optimize\"\n[bake]\ninterior_voxels = 256\n"
         ),
     )
     .unwrap();

@@ -13,10 +13,16 @@ use organtex::synth::fnpts::{SynthOptions, synthesize};
 use organtex::synth::quality::{Rgb, measure, measure_block};
 use organtex::synth::volume::Volume;
 
+/// A photograph of the tissue database, or a texture of tests/data/textures
+/// (gravel, grass, brick: not tissue, kept for synthesis tests).
 fn source(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("database/sources")
-        .join(name)
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let texture = root.join("tests/data/textures").join(name);
+    if texture.is_file() {
+        texture
+    } else {
+        root.join("database/sources").join(name)
+    }
 }
 
 fn crop(name: &str, x: u32, y: u32, side: u32) -> Exemplar {

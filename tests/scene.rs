@@ -739,7 +739,7 @@ fn bad_scenes_get_errors_naming_the_key_and_line() {
         assert_error_at(&base.replace(from, to), message, needle);
     }
 
-    let missing_mesh = "[[node]]\nname = \"organ\"\nmesh = { file = \"liver.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"gravel\"\n";
+    let missing_mesh = "[[node]]\nname = \"organ\"\nmesh = { file = \"liver.obj\" }\n[[node.facet]]\nname = \"*\"\ntexture = \"colon-mucosa\"\n";
     let (err, _) = bake_error(missing_mesh);
     assert!(
         err.contains("line 4: node 'organ': mesh.file:") && err.contains("liver.obj not found"),

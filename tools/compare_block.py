@@ -40,7 +40,7 @@ fair comparison for stereology.
 Usage: tools/compare_block.py [--sizes 64 128] [--methods fnpts optimize stereology]
                               [--floor] [--whole] [--organtex target/release/organtex]
                               [IMAGE ...]
-  default images: the database's gravel and ihc photographs, and grass (a
+  default images: gravel (tests/data/textures), the database's ihc photograph, and grass (a
   photograph the block synthesis was never tuned on).
 Exits 1 if a block fails to synthesise; the ratios are reported, not judged.
 """
@@ -59,6 +59,7 @@ import pyenv  # noqa: E402
 
 ROOT = pyenv.ROOT
 SOURCES = ROOT / "database" / "sources"
+TEXTURES = ROOT / "tests" / "data" / "textures"
 LIMIT = 1.5
 NUMBER = r"(-?[\d.]+|NaN|inf)"
 SLICE = re.compile(rf"slices across (\w): coherence {NUMBER}, completeness {NUMBER}, tiling seam {NUMBER}")
@@ -201,7 +202,7 @@ def main():
     global WHOLE
     WHOLE = args.whole
     pyenv.ensure(["pillow", "numpy"], __file__)
-    images = args.images or [SOURCES / "gravel.png", SOURCES / "ihc.png", SOURCES / "grass.png"]
+    images = args.images or [TEXTURES / "gravel.png", SOURCES / "ihc.png", TEXTURES / "grass.png"]
 
     print(f"{'exemplar':<12}{'size':>5}  {'method':<9}{'time s':>8}  {'axis':<5}{'coh':>7}{'comp':>7}"
           f"{'coh/2D':>8}{'comp/2D':>8}{'seam':>6}")

@@ -9,8 +9,8 @@ completeness, seam; lower coherence and completeness are better, seam 1 is
 seamless).
 
 Usage: tools/compare_synth.py [--runs 3] [--quick] [IMAGE ...]
-  default images: the database's retina (a tissue crop), ihc and gravel
-  photographs, then brick and grass; extra IMAGE paths are cropped the same
+  default images: the database's retina (a tissue crop) and ihc photographs,
+  then gravel, brick and grass (tests/data/textures); extra IMAGE paths are cropped the same
   way (the centre square). --quick: ihc 128 -> 256 only.
 Embark's CLI is installed into target/embark with `cargo install --locked
 texture-synthesis-cli` when it is not on the PATH (a few minutes, once).
@@ -33,8 +33,10 @@ ROOT = pyenv.ROOT
 REQUIREMENTS = ["pillow"]
 SOURCES = ROOT / "database" / "sources"
 # (image, crop centre as fractions of the image): retina on temporal tissue.
-DEFAULTS = [("retina.jpg", (0.62, 0.30)), ("ihc.png", (0.5, 0.5)), ("gravel.png", (0.5, 0.5)),
-            ("brick.png", (0.5, 0.5)), ("grass.png", (0.5, 0.5))]
+TEXTURES = ROOT / "tests" / "data" / "textures"
+DEFAULTS = [(SOURCES / "retina.jpg", (0.62, 0.30)), (SOURCES / "ihc.png", (0.5, 0.5)),
+            (TEXTURES / "gravel.png", (0.5, 0.5)), (TEXTURES / "brick.png", (0.5, 0.5)),
+            (TEXTURES / "grass.png", (0.5, 0.5))]
 
 
 def embark_binary():
@@ -83,7 +85,7 @@ def main():
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
     embark = embark_binary()
-    images = [(SOURCES / n, c) for n, c in DEFAULTS] + [(p, (0.5, 0.5)) for p in args.images]
+    images = DEFAULTS + [(p, (0.5, 0.5)) for p in args.images]
     sizes = [(128, 256), (256, 512)]
     if args.quick:
         images, sizes = [(SOURCES / "ihc.png", (0.5, 0.5))], [(128, 256)]

@@ -27,7 +27,7 @@ def test_the_bunny_unwraps_into_one_chart_without_flips(root):
 
 
 def test_synthesis_tiles_and_repeats_for_a_seed(root):
-    photo = np.asarray(Image.open(root / "database/sources/gravel.png").convert("RGB"))[:128, :128]
+    photo = np.asarray(Image.open(root / "tests/data/textures/gravel.png").convert("RGB"))[:128, :128]
     out = organtex.synth(photo, 128, seed=3)
     assert out.shape == (128, 128, 3) and out.dtype == np.uint8
     # Tiles: the step across the wrap is no larger than steps inside.
@@ -46,7 +46,7 @@ def test_synthesis_tiles_and_repeats_for_a_seed(root):
 
 
 def test_a_block_and_its_section(root):
-    photo = np.asarray(Image.open(root / "database/sources/gravel.png").convert("RGB"))[:64, :64]
+    photo = np.asarray(Image.open(root / "tests/data/textures/gravel.png").convert("RGB"))[:64, :64]
     block = organtex.synth3d(photo, 32)
     assert block.shape == (32, 32, 32, 3)
     cube = organtex.read_mesh(root / "tests/data/cube.obj")

@@ -137,6 +137,9 @@ pub struct Viewer {
     lst: Vec<Option<crate::solid::lst::LstModel>>,
     /// Where the interior block was placed when it went to the GPU.
     block_placement: Option<Placement>,
+    /// Where the 3D view was last drawn, in points (the texture dial turns
+    /// about its centre).
+    view_rect: Option<egui::Rect>,
     /// The cut plane the section was last made for.
     cut_made: Option<([f64; 3], f64)>,
     pub message: Option<Message>,
@@ -203,6 +206,7 @@ impl Viewer {
             },
             lst: Vec::new(),
             block_placement: None,
+            view_rect: None,
             cut_made: None,
             message: None,
             tissues: Vec::new(),
@@ -825,6 +829,11 @@ impl Viewer {
     }
 
     /// Triangles of the cut surface drawn.
+    /// Where the 3D view was last drawn.
+    pub fn view_rect(&self) -> Option<egui::Rect> {
+        self.view_rect
+    }
+
     /// Where the interior block on the GPU lies, if one is.
     pub fn block_placement(&self) -> Option<Placement> {
         self.block_placement.filter(|_| self.has_block())
@@ -986,27 +995,34 @@ impl Viewer {
             .selected
             .and_then(|f| self.doc.as_ref().map(|d| d.settings(f).texture.clone()));
         let mut pick = None;
-        egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
-            for (i, t) in self.tissues.iter().enumerate() {
-                let on = current.as_deref() == Some(t.id.as_str());
-                let r = match &t.thumbnail {
-                    Some(tex) => ui.add(
-                        egui::Button::image_and_text(
-                            egui::Image::new((tex.id(), egui::vec2(48.0, 48.0))),
-                            &t.name,
-                        )
-                        .selected(on),
-                    ),
-                    None => ui.add(egui::Button::new(&t.name).selected(on)),
-                };
-                if r.clicked() {
-                    pick = Some(t.id.clone());
-                }
-                if i % 2 == 1 {
-                    ui.end_row();
-                }
-            }
-        });
+        // The shelf scrolls on its own, so the texture's settings and the
+        // cut plane below it stay in view however many tissues there are.
+        egui::ScrollArea::vertical()
+            .id_salt("tissue shelf")
+            .max_height(170.0)
+            .show(ui, |ui| {
+                egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
+                    for (i, t) in self.tissues.iter().enumerate() {
+                        let on = current.as_deref() == Some(t.id.as_str());
+                        let r = match &t.thumbnail {
+                            Some(tex) => ui.add(
+                                egui::Button::image_and_text(
+                                    egui::Image::new((tex.id(), egui::vec2(48.0, 48.0))),
+                                    &t.name,
+                                )
+                                .selected(on),
+                            ),
+                            None => ui.add(egui::Button::new(&t.name).selected(on)),
+                        };
+                        if r.clicked() {
+                            pick = Some(t.id.clone());
+                        }
+                        if i % 2 == 1 {
+                            ui.end_row();
+                        }
+                    }
+                });
+            });
         if let Some(id) = pick {
             self.pick_tissue(&id);
         }
@@ -1125,6 +1141,7 @@ impl Viewer {
         };
         let was_interacting = std::mem::take(&mut self.interacting);
         let response = ui.add(egui::Image::new((id, avail)).sense(egui::Sense::click_and_drag()));
+        self.view_rect = Some(response.rect);
         let (shift, ctrl) = ui.input(|i| (i.modifiers.shift, i.modifiers.command));
         let delta = response.drag_delta();
         let d = (delta.x as f64, delta.y as f64);

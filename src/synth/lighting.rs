@@ -42,8 +42,17 @@ pub fn spread(pixels: &[[u8; 3]], valid: &[bool], w: usize, h: usize, sigma: f32
 }
 
 /// Divide the usable pixels' colours by the illumination estimate, scaled
-/// so the mean luminance stays where it was.
+/// so the mean luminance stays where it was. Twice: near the picture's
+/// edges the blur sees one side only and leaves part of the fall-off,
+/// which the second pass takes out (a vignette's spread: 11.7 → 3.9 after
+/// one pass, 1.5 after two, in the test below).
 pub fn flatten(ex: &mut Exemplar) {
+    for _ in 0..2 {
+        flatten_once(ex);
+    }
+}
+
+fn flatten_once(ex: &mut Exemplar) {
     let (w, h) = (ex.width, ex.height);
     let lit = illumination(&ex.pixels, &ex.valid, w, h, sigma_for(w.min(h)));
     let (sum, n) = lit
@@ -86,6 +95,7 @@ mod tests {
         let before = spread(&ex.pixels, &ex.valid, w, h, sigma);
         flatten(&mut ex);
         let after = spread(&ex.pixels, &ex.valid, w, h, sigma);
+        eprintln!("spread {before:.1} -> {after:.1}");
         assert!(after < 0.2 * before, "spread {before:.1} -> {after:.1}");
         // The stripes' contrast stays.
         assert!(ex.pixels[80 * w] != ex.pixels[80 * w + 3]);

@@ -3,7 +3,8 @@
 //! axis, masked pixels are never copied, the same seed gives the same bytes
 //! on any thread count, and bad input is refused clearly.
 
-use std::path::PathBuf;
+mod common;
+use common::source;
 use std::process::Command;
 
 use organtex::progress::Silent;
@@ -12,18 +13,6 @@ use organtex::synth::exemplar::{Crop, Exemplar};
 use organtex::synth::fnpts::{SynthOptions, synthesize};
 use organtex::synth::quality::{Rgb, measure, measure_block};
 use organtex::synth::volume::Volume;
-
-/// A photograph of the tissue database, or a texture of tests/data/textures
-/// (gravel, grass, brick: not tissue, kept for synthesis tests).
-fn source(name: &str) -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let texture = root.join("tests/data/textures").join(name);
-    if texture.is_file() {
-        texture
-    } else {
-        root.join("database/sources").join(name)
-    }
-}
 
 fn crop(name: &str, x: u32, y: u32, side: u32) -> Exemplar {
     let crop = Crop {

@@ -2,7 +2,8 @@
 //! never copied, tileable outputs tile, heights follow the colours, vessels
 //! are found, and the same seed gives the same bytes.
 
-use std::path::PathBuf;
+mod common;
+use common::source;
 use std::process::Command;
 
 use organtex::progress::Silent;
@@ -12,18 +13,6 @@ use organtex::synth::height::{exemplar_height, synthesis_height};
 use organtex::synth::quality::{Rgb, measure, seam};
 use organtex::synth::vessel_tree;
 use organtex::synth::vessels::{self, vesselness};
-
-/// A photograph of the tissue database, or a texture of tests/data/textures
-/// (gravel, grass, brick: not tissue, kept for synthesis tests).
-fn source(name: &str) -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let texture = root.join("tests/data/textures").join(name);
-    if texture.is_file() {
-        texture
-    } else {
-        root.join("database/sources").join(name)
-    }
-}
 
 fn crop(name: &str, x: u32, y: u32, side: u32) -> Exemplar {
     Exemplar::load(

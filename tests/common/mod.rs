@@ -35,3 +35,15 @@ pub fn lit_pixels(img: &image::RgbaImage) -> (usize, f64, f64) {
 pub fn changed_pixels(a: &image::RgbaImage, b: &image::RgbaImage) -> usize {
     a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count()
 }
+
+/// A photograph of the tissue database, or a texture of tests/data/textures
+/// (gravel, grass, brick: not tissue, kept for synthesis tests).
+pub fn source(name: &str) -> std::path::PathBuf {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let texture = root.join("tests/data/textures").join(name);
+    if texture.is_file() {
+        texture
+    } else {
+        root.join("database/sources").join(name)
+    }
+}

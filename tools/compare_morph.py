@@ -85,18 +85,21 @@ def write_sections(vol, zs, folder):
     box_obj(folder / "box.obj", (nx, ny, nz))
 
 
-def morph_slice(organtex, folder, z, shape, extra):
-    ny, nx = shape
-    out = folder / f"morph_{z:03d}.png"
-    grid = f"0,0,{z + 0.5};1,0,0;0,1,0;{nx},{ny}"
-    res = subprocess.run([organtex, "morph", str(folder / "box.obj"), "--sections",
-                          str(folder / "sections.toml"), "--grid", grid, "-o", str(out), "--json",
-                          *extra], capture_output=True, text=True)
+def run_grid(organtex, mesh, sections, grid, out, extra=()):
+    """`organtex morph --grid`: the image (float RGB) and the JSON summary."""
+    res = subprocess.run([organtex, "morph", str(mesh), "--sections", str(sections), "--grid", grid,
+                          "-o", str(out), "--json", *extra], capture_output=True, text=True)
     if res.returncode != 0:
         sys.exit(f"organtex morph failed:\n{res.stderr}")
-    summary = json.loads(res.stdout)
-    img = np.asarray(Image.open(out).convert("L"), dtype=np.float64)
-    return img, summary
+    return np.asarray(Image.open(out).convert("RGB"), dtype=np.float64), json.loads(res.stdout)
+
+
+def morph_slice(organtex, folder, z, shape, extra):
+    """The morph of the axial slice at voxel z (grey), and its summary."""
+    ny, nx = shape
+    img, summary = run_grid(organtex, folder / "box.obj", folder / "sections.toml",
+                            f"0,0,{z + 0.5};1,0,0;0,1,0;{nx},{ny}", folder / f"morph_{z:03d}.png", extra)
+    return img.mean(axis=2), summary
 
 
 def gradient(img):
@@ -111,14 +114,6 @@ def scores(pred, truth):
     # Over the whole slice: the background has no gradient in either.
     detail = float(gradient(pred).mean() / gradient(truth).mean())
     return rms, detail
-
-
-def run_grid(organtex, mesh, sections, grid, out):
-    res = subprocess.run([organtex, "morph", str(mesh), "--sections", str(sections), "--grid", grid,
-                          "-o", str(out), "--json"], capture_output=True, text=True)
-    if res.returncode != 0:
-        sys.exit(f"organtex morph failed:\n{res.stderr}")
-    return np.asarray(Image.open(out).convert("RGB"), dtype=np.float64), json.loads(res.stdout)
 
 
 def uterus(organtex):

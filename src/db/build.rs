@@ -89,11 +89,15 @@ pub fn is_current(db: &Database, t: &Tissue) -> Result<bool> {
 /// The exemplar an entry synthesises from: its source, cropped and masked,
 /// its lighting flattened when the entry asks (`lighting = "flatten"`).
 pub fn exemplar(db: &Database, t: &Tissue) -> Result<Exemplar> {
-    let mut ex = masked_source(db, t)?;
+    Ok(lit_as_asked(t, masked_source(db, t)?))
+}
+
+/// `ex` with its lighting flattened if the entry asks for it.
+fn lit_as_asked(t: &Tissue, mut ex: Exemplar) -> Exemplar {
     if t.lighting == Lighting::Flatten {
         lighting::flatten(&mut ex);
     }
-    Ok(ex)
+    ex
 }
 
 /// The entry's source, cropped and masked, as photographed.
@@ -140,10 +144,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
         source.height,
         sigma,
     );
-    let mut ex = source;
-    if t.lighting == Lighting::Flatten {
-        lighting::flatten(&mut ex);
-    }
+    let ex = lit_as_asked(t, source);
     // Everything that can be refused is checked, and the synthesis done,
     // before the entry's folder is made: a refused entry leaves nothing.
     let synthesised = match t

@@ -101,13 +101,29 @@ impl Bsp {
                         e.name(i)
                     ))
                 })?;
+            // Each cell's region, found once: for the vote, then to clip.
+            let region: Vec<usize> = cells
+                .inside
+                .iter()
+                .enumerate()
+                .map(|(k, &inside)| {
+                    let centre = cells.centre(k % cells.w, k / cells.w);
+                    if inside {
+                        bsp.locate(exemplars, e.point(centre))
+                    } else {
+                        usize::MAX
+                    }
+                })
+                .collect();
             let mut votes = vec![0usize; bsp.regions.len()];
-            for c in cells.centres() {
-                votes[bsp.locate(exemplars, e.point(c))] += 1;
+            for &r in region.iter().filter(|&&r| r != usize::MAX) {
+                votes[r] += 1;
             }
             let split =
                 (0..votes.len()).fold(0, |best, r| if votes[r] > votes[best] { r } else { best });
-            cells.retain(e, 0.0, |p| bsp.locate(exemplars, p) == split);
+            for (inside, &r) in cells.inside.iter_mut().zip(&region) {
+                *inside &= r == split;
+            }
             let (w, h) = (e.width as f64, e.height as f64);
             if !cells
                 .centres()

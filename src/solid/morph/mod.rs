@@ -137,6 +137,11 @@ impl Morph {
             .iter()
             .map(|region| {
                 let k = region.bounds.len();
+                let extents: Vec<_> = region
+                    .bounds
+                    .iter()
+                    .map(|b| extent(&b.cells, &sweeps[b.exemplar]))
+                    .collect();
                 (0..k * k)
                     .map(|st| {
                         let (s, t) = (st / k, st % k);
@@ -147,9 +152,9 @@ impl Morph {
                         let (a, b) = (&region.bounds[s], &region.bounds[t]);
                         let warp = Warp::matched(
                             &stacks[a.exemplar],
-                            extent(&a.cells, &sweeps[a.exemplar]),
+                            extents[s],
                             &stacks[b.exemplar],
-                            extent(&b.cells, &sweeps[b.exemplar]),
+                            extents[t],
                         );
                         progress.advance(1);
                         Ok(Some(warp))
@@ -258,19 +263,5 @@ fn extent(cells: &cells::Cells, sweep: &Sweep) -> (glam::DVec2, glam::DVec2) {
 impl Interior for Morph {
     fn colour(&self, p: DVec3) -> [u8; 3] {
         point::colour(self, p)
-    }
-
-    fn colours(&self, points: &[DVec3]) -> Vec<[u8; 3]> {
-        // Chunks amortise rayon's task cost over cheap points; each point
-        // is computed alone, so the bytes do not depend on the split.
-        let mut out = vec![[0u8; 3]; points.len()];
-        out.par_chunks_mut(1024)
-            .zip(points.par_chunks(1024))
-            .for_each(|(o, p)| {
-                for (o, &p) in o.iter_mut().zip(p) {
-                    *o = point::colour(self, p);
-                }
-            });
-        out
     }
 }

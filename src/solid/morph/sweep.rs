@@ -82,8 +82,15 @@ impl Sweep {
             .map(|&p| e.height(p).abs())
             .fold(0.0, f64::max);
         let dt = reach / HALF_LEVELS as f64;
+        // An arc sweeps by rotation and reads only the exemplar's own
+        // section (for the mask's fit): the other heights stay empty and
+        // are filled from it below.
+        let arc = matches!(e.path, SweepPath::Arc { .. });
         let mut levels: Vec<Option<Outline>> = (0..=2 * HALF_LEVELS)
             .map(|k| {
+                if arc && k != HALF_LEVELS {
+                    return Ok(None);
+                }
                 let t = (k as f64 - HALF_LEVELS as f64) * dt;
                 let Some(mut cells) = Cells::section(mesh, topology, e, t, LEVEL_SIDE)? else {
                     return Ok(None);
@@ -143,7 +150,8 @@ impl Sweep {
             let ab = e.pixel_coords(on_plane);
             return (t, self.fitted(ab, 0.0));
         }
-        (e.height(p), self.fitted(e.pixel_coords(p), e.height(p)))
+        let t = e.height(p);
+        (t, self.fitted(e.pixel_coords(p), t))
     }
 
     /// The image point of the plane point `ab` swept `t` along the normal:

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use organtex::db::build::is_current;
 use organtex::db::index::Lighting;
-use organtex::db::{Database, Output, build};
+use organtex::db::{Database, Output, Shelf, build};
 use organtex::progress::Silent;
 
 fn shipped() -> PathBuf {
@@ -13,9 +13,9 @@ fn shipped() -> PathBuf {
 }
 
 #[test]
-fn the_shipped_database_lists_six_real_entries() {
+fn the_shipped_database_lists_eight_real_entries() {
     let db = Database::open(&shipped()).unwrap();
-    assert!(db.tissues.len() >= 6);
+    assert!(db.tissues.len() >= 8);
     assert!(
         db.tissues
             .iter()
@@ -126,5 +126,39 @@ fn every_endoscope_frame_entry_has_its_lighting_flattened() {
             lit.spread_after
         );
         assert!(t.licence.is_some() && t.credit.is_some(), "{}", t.id);
+    }
+}
+
+#[test]
+fn every_source_is_licensed_and_every_shelf_stocked() {
+    // Issue 28: every file in database/sources/ has its row in
+    // LICENSES.md (the licence notices beside it excepted), every entry
+    // names its licence and credit line, the test textures that are not
+    // tissue stay off the shelf, and each of the viewer's shelves has
+    // entries.
+    let db = Database::open(&shipped()).unwrap();
+    let sources = shipped().join("sources");
+    let licences = std::fs::read_to_string(sources.join("LICENSES.md")).unwrap();
+    for file in std::fs::read_dir(&sources).unwrap() {
+        let name = file.unwrap().file_name().into_string().unwrap();
+        if name == "LICENSES.md" || name.starts_with("LICENSE-") {
+            continue;
+        }
+        assert!(
+            licences.contains(&format!("| {name} |")) || licences.contains(&format!("`{name}`")),
+            "database/sources/{name} has no row in LICENSES.md"
+        );
+    }
+    for t in &db.tissues {
+        assert!(t.licence.is_some() && t.credit.is_some(), "{}", t.id);
+        for not_tissue in ["gravel", "grass", "brick"] {
+            assert!(!t.source.to_string_lossy().contains(not_tissue), "{}", t.id);
+        }
+    }
+    for shelf in Shelf::ALL {
+        assert!(
+            db.tissues.iter().filter(|t| t.shelf() == shelf).count() >= 2,
+            "the {shelf:?} shelf"
+        );
     }
 }

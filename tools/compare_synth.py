@@ -1,17 +1,28 @@
 #!/usr/bin/env python3
 """Compare organtex's FNPTS synthesis with Embark's texture-synthesis.
 
-Both tools make tileable textures from the same crops (128 -> 256 and
-256 -> 512 pixels) with their default settings; each run is timed as a whole
-process (load, synthesis, save), the median of --runs runs. Quality is
-measured the same way for both (`organtex synth-quality`: coherence,
-completeness, seam; lower coherence and completeness are better, seam 1 is
-seamless).
+Cases, each synthesised by both tools into a tileable 512 x 512 texture
+with their default settings, once per seed:
+  - every entry of the tissue database with a colour output, from the
+    exemplar its build uses (`organtex db exemplar`: cropped, lighting
+    flattened where the entry asks), with its mask (Embark:
+    --sample-masks);
+  - the tissue photographs in tests/data/tissues, which no setting of
+    organtex was tuned on (see tests/data/PROVENANCE.md);
+  - any IMAGE given, whole;
+  - with --textures, the non-tissue test textures (gravel, brick, grass),
+    128-pixel centre crops to 256.
+Each run is timed as a whole process (load, synthesis, save). Quality is
+measured the same way for both (`organtex synth-quality`, with the mask):
+coherence and completeness, lower is better; seam, 1 is seamless. The
+table gives the median over the seeds of each figure.
 
-Usage: tools/compare_synth.py [--runs 3] [--quick] [IMAGE ...]
-  default images: the database's retina (a tissue crop) and ihc photographs,
-  then gravel, brick and grass (tests/data/textures); extra IMAGE paths are cropped the same
-  way (the centre square). --quick: ihc 128 -> 256 only.
+Targets (issue 28): coherence and completeness at least as good as
+Embark's, at most 0.5x its time, seam at most 1.15. --check exits 1 when a
+case misses one.
+
+Usage: tools/compare_synth.py [--seeds 3] [--only ID ...] [--textures]
+                              [--json OUT] [--check] [IMAGE ...]
 Embark's CLI is installed into target/embark with `cargo install --locked
 texture-synthesis-cli` when it is not on the PATH (a few minutes, once).
 """
@@ -31,12 +42,10 @@ import pyenv  # noqa: E402
 
 ROOT = pyenv.ROOT
 REQUIREMENTS = ["pillow"]
-SOURCES = ROOT / "database" / "sources"
-# (image, crop centre as fractions of the image): retina on temporal tissue.
+UNTUNED = ROOT / "tests" / "data" / "tissues"
 TEXTURES = ROOT / "tests" / "data" / "textures"
-DEFAULTS = [(SOURCES / "retina.jpg", (0.62, 0.30)), (SOURCES / "ihc.png", (0.5, 0.5)),
-            (TEXTURES / "gravel.png", (0.5, 0.5)), (TEXTURES / "brick.png", (0.5, 0.5)),
-            (TEXTURES / "grass.png", (0.5, 0.5))]
+OUT_SIDE = 512
+TIME_RATIO, SEAM = 0.5, 1.15
 
 
 def embark_binary():
@@ -51,64 +60,127 @@ def embark_binary():
     return str(local)
 
 
-def crop(image, centre, side, out):
+def split_alpha(rgba, rgb_out, mask_out):
+    """The exemplar's colours and its mask (white usable) as two files, the
+    form both tools read."""
+    from PIL import Image
+
+    im = Image.open(rgba)
+    im.convert("RGB").save(rgb_out)
+    alpha = im.getchannel("A") if "A" in im.getbands() else Image.new("L", im.size, 255)
+    alpha.point(lambda a: 255 if a >= 128 else 0).save(mask_out)
+
+
+def centre_crop(image, side, out):
     from PIL import Image
 
     im = Image.open(image).convert("RGB")
-    cx, cy = int(centre[0] * im.width), int(centre[1] * im.height)
-    x = min(max(cx - side // 2, 0), im.width - side)
-    y = min(max(cy - side // 2, 0), im.height - side)
+    x, y = (im.width - side) // 2, (im.height - side) // 2
     im.crop((x, y, x + side, y + side)).save(out)
 
 
-def timed(cmd, runs):
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        subprocess.run(cmd, check=True, capture_output=True)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+def timed(cmd):
+    start = time.perf_counter()
+    subprocess.run(cmd, check=True, capture_output=True)
+    return time.perf_counter() - start
 
 
-def quality(organtex, exemplar, texture):
-    out = subprocess.run([organtex, "synth-quality", str(exemplar), str(texture)], check=True,
-                         capture_output=True, text=True)
-    return json.loads(out.stdout)
+def quality(organtex, exemplar, mask, texture):
+    cmd = [organtex, "synth-quality", str(exemplar), str(texture)] + (["--mask", str(mask)] if mask else [])
+    return json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+
+
+def database_cases(organtex, tmp, only):
+    """(name, exemplar, mask, output side) of every entry with a colour
+    output."""
+    import tomllib
+
+    index = tomllib.loads((ROOT / "database" / "index.toml").read_text())
+    cases = []
+    for t in index["tissue"]:
+        if "colour" not in t.get("outputs", []) or (only and t["id"] not in only):
+            continue
+        rgba = tmp / f"{t['id']}-rgba.png"
+        subprocess.run([organtex, "db", "exemplar", t["id"], "-o", str(rgba)], check=True, capture_output=True)
+        rgb, mask = tmp / f"{t['id']}.png", tmp / f"{t['id']}-mask.png"
+        split_alpha(rgba, rgb, mask)
+        side = t.get("synthesis", {}).get("width", OUT_SIDE)
+        cases.append((t["id"], rgb, mask, side))
+    return cases
+
+
+def compare(organtex, embark, case, seeds):
+    name, exemplar, mask, side = case
+    runs = []
+    for seed in seeds:
+        ours, theirs = exemplar.with_name("ours.png"), exemplar.with_name("embark.png")
+        t_ours = timed([organtex, "synth", str(exemplar), "--size", str(side), "--tileable", "--seed", str(seed),
+                        "-o", str(ours)] + (["--mask", str(mask)] if mask else []))
+        # --sample-masks takes several values: an option must follow it.
+        t_emb = timed([embark, "--tiling", "--no-progress", "--seed", str(seed), "--out-size", str(side)]
+                      + (["--sample-masks", str(mask)] if mask else []) + ["--out", str(theirs), "generate", str(exemplar)])
+        runs.append({"organtex": dict(quality(organtex, exemplar, mask, ours), seconds=t_ours),
+                     "embark": dict(quality(organtex, exemplar, mask, theirs), seconds=t_emb)})
+    med = {tool: {k: statistics.median(r[tool][k] for r in runs) for k in runs[0][tool]}
+           for tool in ("organtex", "embark")}
+    o, e = med["organtex"], med["embark"]
+    misses = [what for what, ok in (
+        ("coherence", o["coherence"] <= e["coherence"]),
+        ("completeness", o["completeness"] <= e["completeness"]),
+        (f"time > {TIME_RATIO}x", o["seconds"] <= TIME_RATIO * e["seconds"]),
+        (f"seam > {SEAM}", o["seam"] <= SEAM)) if not ok]
+    return {"case": name, "size": side, "seeds": list(seeds), "median": med, "runs": runs, "misses": misses}
 
 
 def main():
     pyenv.ensure(REQUIREMENTS, __file__)
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("images", nargs="*", type=Path)
-    parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--only", nargs="*", default=[], help="database entry ids or untuned image stems to run")
+    parser.add_argument("--textures", action="store_true")
+    parser.add_argument("--json", type=Path)
+    parser.add_argument("--check", action="store_true")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     args = parser.parse_args()
     embark = embark_binary()
-    images = DEFAULTS + [(p, (0.5, 0.5)) for p in args.images]
-    sizes = [(128, 256), (256, 512)]
-    if args.quick:
-        images, sizes = [(SOURCES / "ihc.png", (0.5, 0.5))], [(128, 256)]
-
-    print(f"{'image':<14}{'size':<11}{'tool':<10}{'time s':>8}{'coherence':>11}{'complete':>10}{'seam':>7}  organtex vs Embark")
+    results = []
+    print(f"{'case':<22}{'size':>5} {'tool':<10}{'time s':>8}{'coherence':>11}{'complete':>10}{'seam':>7}  organtex vs Embark")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for image, centre in images:
-            for side, out_side in sizes:
-                src = tmp / f"{image.stem}{side}.png"
-                crop(image, centre, side, src)
-                ours, theirs = tmp / "ours.png", tmp / "embark.png"
-                t_ours = timed([args.organtex, "synth", str(src), "--size", str(out_side), "--tileable", "-o", str(ours)],
-                               args.runs)
-                t_emb = timed([embark, "--tiling", "--no-progress", "--out-size", str(out_side), "--out", str(theirs),
-                               "generate", str(src)], args.runs)
-                q_ours, q_emb = quality(args.organtex, src, ours), quality(args.organtex, src, theirs)
-                label = f"{side}->{out_side}"
-                verdict = (f"time x{t_ours / t_emb:.2f}, coherence {'better' if q_ours['coherence'] < q_emb['coherence'] else 'WORSE'}, "
-                           f"completeness {'better' if q_ours['completeness'] < q_emb['completeness'] else 'WORSE'}")
-                for tool, t, q, note in (("organtex", t_ours, q_ours, verdict), ("embark", t_emb, q_emb, "")):
-                    print(f"{image.stem:<14}{label:<11}{tool:<10}{t:8.2f}{q['coherence']:11.2f}{q['completeness']:10.2f}"
-                          f"{q['seam']:7.2f}  {note}")
+        cases = database_cases(args.organtex, tmp, args.only)
+        cases += [(p.stem, p, None, OUT_SIDE) for p in sorted(UNTUNED.glob("*.png"))
+                  if not args.only or p.stem in args.only]
+        cases += [(p.stem, p, None, OUT_SIDE) for p in args.images]
+        if args.textures:
+            for name in ("gravel", "brick", "grass"):
+                crop = tmp / f"{name}128.png"
+                centre_crop(TEXTURES / f"{name}.png", 128, crop)
+                cases.append((name, crop, None, 256))
+        for case in cases:
+            workdir = tmp / f"run-{case[0]}"
+            workdir.mkdir()
+            exemplar = workdir / "exemplar.png"
+            shutil.copy(case[1], exemplar)
+            mask = None
+            if case[2]:
+                mask = workdir / "mask.png"
+                shutil.copy(case[2], mask)
+            r = compare(args.organtex, embark, (case[0], exemplar, mask, case[3]), range(1, args.seeds + 1))
+            results.append(r)
+            o, e = r["median"]["organtex"], r["median"]["embark"]
+            verdict = f"time x{o['seconds'] / e['seconds']:.2f}, " + ("meets every target" if not r["misses"]
+                                                                   else "MISSES " + ", ".join(r["misses"]))
+            for tool, q, note in (("organtex", o, verdict), ("embark", e, "")):
+                print(f"{case[0]:<22}{case[3]:>5} {tool:<10}{q['seconds']:8.2f}{q['coherence']:11.2f}"
+                      f"{q['completeness']:10.2f}{q['seam']:7.2f}  {note}", flush=True)
+    missed = [r["case"] for r in results if r["misses"]]
+    print(f"{len(results) - len(missed)} of {len(results)} cases meet every target"
+          + (f"; missed: {', '.join(missed)}" if missed else ""))
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=1))
+    if args.check and missed:
+        sys.exit(1)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ use glam::DVec3;
 use super::document::Document;
 use super::file_dialog::{FileDialog, Outcome, Purpose};
 use super::jobs::{Job, Running};
+use crate::db::Shelf;
 use crate::error::{Error, Result};
 use crate::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
 use crate::scene::build::{BakedScene, Tissues, ensure_tissues};
@@ -66,10 +67,22 @@ pub struct Message {
 struct TissueEntry {
     id: String,
     name: String,
+    shelf: Shelf,
+    /// Licence and credit line, shown on hover.
+    credit: String,
     thumbnail: Option<egui::TextureHandle>,
 }
 
-type Thumbnails = Vec<(String, String, Option<egui::ColorImage>)>;
+/// A tissue for the shelf, as read off the database by a background job.
+struct ShelfItem {
+    id: String,
+    name: String,
+    shelf: Shelf,
+    credit: String,
+    thumbnail: Option<egui::ColorImage>,
+}
+
+type Thumbnails = Vec<ShelfItem>;
 
 /// What the cut plane shows inside: the interior block, and per node its
 /// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
@@ -289,6 +302,20 @@ impl Viewer {
         }
     }
 
+    /// Lay vessel overlay `id` over the selected facet, or take it off if
+    /// it is the facet's overlay already.
+    pub fn pick_overlay(&mut self, id: &str) {
+        let (Some(doc), Some(f)) = (&mut self.doc, self.selected) else {
+            return;
+        };
+        let mut s = doc.settings(f).clone();
+        s.overlay = (s.overlay.as_deref() != Some(id)).then(|| id.to_string());
+        doc.set_settings(f, s);
+        if doc.baked.is_some() {
+            self.rebuild_tissues();
+        }
+    }
+
     /// The tissue textures the scene now uses (built if missing), then a
     /// fresh draw list.
     fn rebuild_tissues(&mut self) {
@@ -447,13 +474,18 @@ impl Viewer {
                 Ok(list) => {
                     self.tissues = list
                         .into_iter()
-                        .map(|(id, name, img)| TissueEntry {
-                            thumbnail: img.map(|i| {
-                                self.ctx
-                                    .load_texture(format!("tissue:{id}"), i, Default::default())
+                        .map(|t| TissueEntry {
+                            thumbnail: t.thumbnail.map(|i| {
+                                self.ctx.load_texture(
+                                    format!("tissue:{}", t.id),
+                                    i,
+                                    Default::default(),
+                                )
                             }),
-                            id,
-                            name,
+                            id: t.id,
+                            name: t.name,
+                            shelf: t.shelf,
+                            credit: t.credit,
                         })
                         .collect()
                 }
@@ -993,38 +1025,53 @@ impl Viewer {
         ui.label("Tissue");
         let current = self
             .selected
-            .and_then(|f| self.doc.as_ref().map(|d| d.settings(f).texture.clone()));
+            .and_then(|f| self.doc.as_ref().map(|d| d.settings(f).clone()));
         let mut pick = None;
         // The shelf scrolls on its own, so the texture's settings and the
         // cut plane below it stay in view however many tissues there are.
         egui::ScrollArea::vertical()
             .id_salt("tissue shelf")
-            .max_height(170.0)
+            .max_height(200.0)
             .show(ui, |ui| {
-                egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
-                    for (i, t) in self.tissues.iter().enumerate() {
-                        let on = current.as_deref() == Some(t.id.as_str());
-                        let r = match &t.thumbnail {
-                            Some(tex) => ui.add(
-                                egui::Button::image_and_text(
-                                    egui::Image::new((tex.id(), egui::vec2(48.0, 48.0))),
-                                    &t.name,
-                                )
-                                .selected(on),
-                            ),
-                            None => ui.add(egui::Button::new(&t.name).selected(on)),
-                        };
-                        if r.clicked() {
-                            pick = Some(t.id.clone());
-                        }
-                        if i % 2 == 1 {
-                            ui.end_row();
-                        }
+                for shelf in Shelf::ALL {
+                    let on_shelf: Vec<&TissueEntry> =
+                        self.tissues.iter().filter(|t| t.shelf == shelf).collect();
+                    if on_shelf.is_empty() {
+                        continue;
                     }
-                });
+                    ui.label(egui::RichText::new(shelf.title()).small().strong());
+                    egui::Grid::new(("tissues", shelf.title()))
+                        .num_columns(2)
+                        .show(ui, |ui| {
+                            for (i, t) in on_shelf.into_iter().enumerate() {
+                                let on = current.as_ref().is_some_and(|s| match shelf {
+                                    Shelf::Overlay => s.overlay.as_deref() == Some(t.id.as_str()),
+                                    _ => s.texture == t.id,
+                                });
+                                let r = match &t.thumbnail {
+                                    Some(tex) => ui.add(
+                                        egui::Button::image_and_text(
+                                            egui::Image::new((tex.id(), egui::vec2(40.0, 40.0))),
+                                            &t.name,
+                                        )
+                                        .selected(on),
+                                    ),
+                                    None => ui.add(egui::Button::new(&t.name).selected(on)),
+                                };
+                                if r.on_hover_text(&t.credit).clicked() {
+                                    pick = Some((t.id.clone(), shelf));
+                                }
+                                if i % 2 == 1 {
+                                    ui.end_row();
+                                }
+                            }
+                        });
+                }
             });
-        if let Some(id) = pick {
-            self.pick_tissue(&id);
+        match pick {
+            Some((id, Shelf::Overlay)) => self.pick_overlay(&id),
+            Some((id, _)) => self.pick_tissue(&id),
+            None => {}
         }
         if let (Some(f), Some(doc)) = (self.selected, &self.doc) {
             ui.separator();
@@ -1341,29 +1388,46 @@ fn dial_turn(centre: egui::Pos2, pointer: Option<egui::Pos2>, delta: egui::Vec2)
     -swept.to_degrees()
 }
 
-/// Every tissue's id, name and a 64-pixel thumbnail of its colour texture
-/// (built) or its photograph (not yet built).
+/// Every tissue's shelf entry: id, name, shelf, licence and credit line,
+/// and a 64-pixel thumbnail of its built texture or overlay (its
+/// photograph while not yet built).
 fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
+    use crate::db::Output;
     let db = crate::db::Database::open(database)?;
     Ok(db
         .tissues
         .iter()
-        .filter(|t| t.outputs.contains(&crate::db::Output::Colour))
         .map(|t| {
-            let built = db.output_path(&t.id, crate::db::Output::Colour);
+            let output = if t.outputs.contains(&Output::Colour) {
+                Output::Colour
+            } else {
+                Output::Overlay
+            };
+            let built = db.output_path(&t.id, output);
             let path = if built.exists() {
                 built
             } else {
                 db.root.join(&t.source)
             };
-            let img = crate::synth::exemplar::read_image(&path).ok().map(|i| {
+            let thumbnail = crate::synth::exemplar::read_image(&path).ok().map(|i| {
                 let small = i.thumbnail(64, 64).to_rgba8();
                 egui::ColorImage::from_rgba_unmultiplied(
                     [small.width() as usize, small.height() as usize],
                     small.as_raw(),
                 )
             });
-            (t.id.clone(), t.name.clone(), img)
+            let credit = match (&t.licence, &t.credit) {
+                (_, Some(credit)) => credit.clone(),
+                (Some(licence), None) => licence.clone(),
+                (None, None) => "see the database's sources/LICENSES.md".into(),
+            };
+            ShelfItem {
+                id: t.id.clone(),
+                name: t.name.clone(),
+                shelf: t.shelf(),
+                credit,
+                thumbnail,
+            }
         })
         .collect())
 }

@@ -1,10 +1,11 @@
-//! `organtex db list|build`: the tissue texture database.
+//! `organtex db list|build|exemplar`: the tissue texture database.
 
 use std::path::PathBuf;
 
 use clap::Subcommand;
 use organtex::Result;
-use organtex::db::{Database, build};
+use organtex::db::build::is_current;
+use organtex::db::{Database, build, exemplar};
 
 use super::progress::Bars;
 
@@ -19,12 +20,24 @@ pub struct Args {
 
 #[derive(Subcommand)]
 enum DbCommand {
-    /// List the entries and whether their outputs are built.
+    /// List the entries: kind, the viewer's shelf, outputs, licence and
+    /// whether their outputs are built.
     List,
     /// Regenerate outputs from the sources (all entries, or those named).
     Build {
         /// Entry ids to build (default: all).
         ids: Vec<String>,
+    },
+    /// Write the exemplar an entry synthesises from, as the build prepares
+    /// it (cropped, lighting flattened where asked): an RGBA PNG whose
+    /// alpha is 255 on usable pixels and 0 where the mask rules hide them.
+    /// `organtex synth` and other synthesisers read it as a masked exemplar.
+    Exemplar {
+        /// Entry id.
+        id: String,
+        /// Output PNG.
+        #[arg(short, long)]
+        output: PathBuf,
     },
 }
 
@@ -36,9 +49,29 @@ pub fn run(args: Args) -> Result<()> {
     let db = Database::open(&args.database)?;
     match args.command {
         DbCommand::List => {
+            let licence = |t: &organtex::db::Tissue| {
+                t.licence
+                    .clone()
+                    .unwrap_or_else(|| "see LICENSES.md".into())
+            };
+            let width = |f: &dyn Fn(&organtex::db::Tissue) -> usize, title: &str| {
+                db.tissues
+                    .iter()
+                    .map(f)
+                    .chain([title.len()])
+                    .max()
+                    .unwrap_or(0)
+                    + 2
+            };
+            let (wi, wn, wk, wl) = (
+                width(&|t| t.id.len(), "id"),
+                width(&|t| t.name.chars().count(), "name"),
+                width(&|t| t.kind.len(), "kind"),
+                width(&|t| licence(t).len(), "licence"),
+            );
             println!(
-                "{:<20}{:<46}{:<20}{:<24}{:<16}built",
-                "id", "name", "kind", "outputs", "licence"
+                "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<24}{:<wl$}built",
+                "id", "name", "kind", "shelf", "outputs", "licence"
             );
             for t in &db.tissues {
                 let outputs: Vec<String> = t
@@ -50,14 +83,19 @@ pub fn run(args: Args) -> Result<()> {
                     .outputs
                     .iter()
                     .all(|&o| db.output_path(&t.id, o).is_file());
+                let built = match (built, built && is_current(&db, t)?) {
+                    (false, _) => "no",
+                    (true, false) => "out of date",
+                    (true, true) => "yes",
+                };
                 println!(
-                    "{:<20}{:<46}{:<20}{:<24}{:<16}{}",
+                    "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<24}{:<wl$}{built}",
                     t.id,
                     t.name,
                     t.kind,
+                    t.shelf().title().to_lowercase(),
                     outputs.join(", "),
-                    t.licence.as_deref().unwrap_or("see LICENSES.md"),
-                    if built { "yes" } else { "no" }
+                    licence(t),
                 );
             }
         }
@@ -77,7 +115,7 @@ pub fn run(args: Args) -> Result<()> {
                         )
                     })
                     .unwrap_or_default();
-                println!("{:<16}{:>6.2} s  {q}", b.id, b.seconds);
+                println!("{:<20}{:>6.2} s  {q}", b.id, b.seconds);
             }
             println!(
                 "built {} entries into {} in {:.1} s",
@@ -85,6 +123,20 @@ pub fn run(args: Args) -> Result<()> {
                 db.root.join("build").display(),
                 start.elapsed().as_secs_f64()
             );
+        }
+        DbCommand::Exemplar { id, output } => {
+            let ex = exemplar(&db, db.tissue(&id)?)?;
+            let raw = ex
+                .pixels
+                .iter()
+                .zip(&ex.valid)
+                .flat_map(|(p, &v)| [p[0], p[1], p[2], if v { 255 } else { 0 }])
+                .collect();
+            // One RGBA pixel per exemplar pixel: the buffer always fits.
+            let img =
+                image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");
+            organtex::atomic::write_png(&output, &image::DynamicImage::ImageRgba8(img))?;
+            println!("{}", output.display());
         }
     }
     Ok(())

@@ -31,14 +31,16 @@ pub struct Args {
     /// Iterations per pixel and pyramid level (M).
     #[arg(long, default_value_t = 3)]
     iterations: usize,
-    /// Pyramid levels (default: as many as keep 32 pixels a side).
+    /// Pyramid levels (default: down to an exemplar of about 16 pixels a
+    /// side, an output of 32).
     #[arg(long, value_parser = levels_in_range)]
     levels: Option<usize>,
     /// Side of the square neighbourhood compared (odd).
     #[arg(long, default_value_t = 7)]
     neighbourhood: usize,
-    /// Weight of the occurrence cost, which spreads copies over the whole
-    /// exemplar (0: the paper's cost alone).
+    /// Weight of the occurrence penalty, which spreads copies over the whole
+    /// exemplar: a candidate's cost is multiplied by 1 + this x how far its
+    /// source is over-used (0: the paper's cost alone).
     #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Output PNG.

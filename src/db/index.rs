@@ -7,6 +7,10 @@
 //! id = "fundus-tissue"              # unique, used by scenes
 //! name = "Fundus tissue"
 //! kind = "retina"                   # tissue kind, free text
+//! shelf = "surface"                 # optional: surface, interior or
+//!                                   # overlay, the viewer's shelf it is
+//!                                   # shown on (default: overlay for an
+//!                                   # overlay-only entry, else surface)
 //! source = "sources/retina.jpg"     # relative to the database folder
 //! crop = { x = 250, y = 250, width = 900, height = 900 }   # optional
 //! mask = "masks/x.png"              # optional: white usable
@@ -118,6 +122,21 @@ pub struct Tissue {
     /// The credit line the licence asks for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub credit: Option<String>,
+    /// The viewer's shelf, when stated; `shelf()` gives the default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shelf: Option<Shelf>,
+}
+
+impl Tissue {
+    /// The shelf the entry is shown on: as stated, else overlay for an
+    /// entry that only makes an overlay, else surface.
+    pub fn shelf(&self) -> Shelf {
+        self.shelf.unwrap_or(if self.outputs == [Output::Overlay] {
+            Shelf::Overlay
+        } else {
+            Shelf::Surface
+        })
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -126,6 +145,29 @@ pub enum Lighting {
     #[default]
     Keep,
     Flatten,
+}
+
+/// Where the viewer shows an entry: a texture for organ surfaces, one for
+/// cut surfaces and interiors (histology), or a vessel overlay.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Shelf {
+    #[default]
+    Surface,
+    Interior,
+    Overlay,
+}
+
+impl Shelf {
+    pub const ALL: [Shelf; 3] = [Shelf::Surface, Shelf::Interior, Shelf::Overlay];
+
+    pub fn title(self) -> &'static str {
+        match self {
+            Shelf::Surface => "Surface",
+            Shelf::Interior => "Interior",
+            Shelf::Overlay => "Overlay",
+        }
+    }
 }
 
 /// A database: its folder and entries.
@@ -175,6 +217,14 @@ impl Database {
             }
             if t.outputs.is_empty() {
                 return Err(fail("no outputs".into()));
+            }
+            let overlay_only = t.outputs == [Output::Overlay];
+            if overlay_only != (t.shelf() == Shelf::Overlay) {
+                return Err(fail(format!(
+                    "shelf = \"{}\" does not fit outputs {:?}: the overlay shelf holds the entries that make an overlay alone",
+                    t.shelf().title().to_lowercase(),
+                    t.outputs
+                )));
             }
         }
         Ok(Database {

@@ -5,5 +5,5 @@
 pub mod build;
 pub mod index;
 
-pub use build::{Built, build};
-pub use index::{Database, Output, Tissue};
+pub use build::{Built, build, exemplar};
+pub use index::{Database, Output, Shelf, Tissue};

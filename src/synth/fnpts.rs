@@ -27,12 +27,24 @@
 //!
 //! Occurrence (beyond the paper, after Kaspar et al. 2015 and Jamriška et
 //! al. 2015): copying grows islands over whatever matches easily and can
-//! leave parts of the exemplar unused. Each candidate also pays
-//! `occurrence` x (largest pixel cost x M) per even share by which its
-//! source pixel is already over-used (use counted after every class, so it
-//! stays deterministic). On 128-pixel crops of the database photographs this
-//! cuts the completeness figure by up to 5x for a few percent of coherence;
+//! leave parts of the exemplar unused. A candidate's cost is multiplied by
+//! 1 + `occurrence` x the even shares by which its source pixel is already
+//! over-used (use counted after every class, so it stays deterministic).
+//! The penalty is relative, not added: on the even background of a
+//! sparse-feature exemplar (a few dots or thin vessels on smooth tissue)
+//! every candidate matches almost equally well, and an added penalty
+//! outweighed the match there, so the least-used pixel won and the output
+//! became pixels shuffled one by one, its features broken. Multiplied, a
+//! coherent continuation that matches exactly stays free. On the tissue
+//! database (512-pixel outputs) the added form lost to Embark's coherence
+//! on 6 of 12 tissues; this form wins on all (tools/compare_synth.py).
 //! `occurrence = 0` gives the paper's cost exactly.
+//!
+//! Pyramid depth (beyond the paper): by default the levels go down until
+//! the coarsest exemplar is about 16 pixels a side, where one 7 x 7
+//! neighbourhood sees a good part of it, so the layout (shading, where the
+//! sparse features lie) is decided coherently there; the output stops at
+//! 32 pixels a side.
 
 use rayon::prelude::*;
 
@@ -50,12 +62,14 @@ pub struct SynthOptions {
     pub seed: u64,
     /// M: iterations per pixel and level.
     pub iterations: usize,
-    /// Pyramid levels; `None` picks as many as keep the coarsest exemplar and
-    /// output at least 32 pixels wide.
+    /// Pyramid levels; `None` picks as many as keep the coarsest exemplar at
+    /// least 16 pixels wide and the output 32.
     pub levels: Option<usize>,
     /// K: side of the square neighbourhood (odd).
     pub neighbourhood: usize,
-    /// Weight of the occurrence cost (0: the paper's cost alone).
+    /// Weight of the occurrence penalty, which multiplies a candidate's
+    /// cost (0: the paper's cost alone). 3D synthesis (`block`) adds its
+    /// penalty instead.
     pub occurrence: f64,
 }
 
@@ -169,8 +183,16 @@ impl Synthesis {
     }
 }
 
+/// Smallest side of the coarsest exemplar and output that the default
+/// pyramid goes down to (module doc: "Pyramid depth"). 32 for both left
+/// the database's 90 to 340 pixel crops two or three levels, and the fine
+/// levels had to place features they could not see whole.
+const COARSEST_EXEMPLAR: usize = 16;
+const COARSEST_OUTPUT: usize = 32;
+
 /// Exemplar pyramid, finest first: as many levels as asked, or (by
-/// default) while the next exemplar and output would keep 32 pixels a side.
+/// default) while the next exemplar keeps `COARSEST_EXEMPLAR` pixels a side
+/// and the next output `COARSEST_OUTPUT`.
 fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
     let mut pyramid = vec![ex.clone()];
     match opts.levels {
@@ -195,8 +217,8 @@ fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
             }
         }
         None => {
-            while opts.width.min(opts.height) >> pyramid.len() >= 32 {
-                match pyramid.last().and_then(|e| e.downsample(32)) {
+            while opts.width.min(opts.height) >> pyramid.len() >= COARSEST_OUTPUT {
+                match pyramid.last().and_then(|e| e.downsample(COARSEST_EXEMPLAR)) {
                     Some(coarser) => pyramid.push(coarser),
                     None => break,
                 }
@@ -474,7 +496,14 @@ impl<'a> Level<'a> {
             let own = (self.coord[p] == c) as u32 as f64;
             let over =
                 (self.usage[c as usize] as f64 - own - self.share).max(0.0) / self.share.max(1.0);
-            let mut cost = (opts.occurrence * over * (MAX_PIXEL_COST * m) as f64) as i64;
+            let factor = 1.0 + opts.occurrence * over;
+            // The match cost at which this candidate can no longer win.
+            let limit = if best.0 == i64::MAX {
+                i64::MAX
+            } else {
+                (best.0 as f64 / factor).ceil() as i64
+            };
+            let mut cost = 0i64;
             for &(dx, dy) in window {
                 let Some(q) = self.at(x, y, dx, dy, opts.tileable) else {
                     continue;
@@ -490,10 +519,11 @@ impl<'a> Level<'a> {
                         + (a[2] as i64 - b[2] as i64).abs();
                     cost += d * self.iters[q] as i64;
                 }
-                if cost >= best.0 {
+                if cost >= limit {
                     break;
                 }
             }
+            let cost = (cost as f64 * factor) as i64;
             if cost < best.0 {
                 best = (cost, c);
             }

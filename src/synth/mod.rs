@@ -3,6 +3,7 @@
 //! computed from the photographs.
 
 pub mod block;
+pub mod components;
 pub mod exemplar;
 pub mod filter;
 pub mod fnpts;

@@ -14,6 +14,7 @@ use super::sections::Exemplar;
 use crate::error::Result;
 use crate::mesh::{Topology, TriMesh};
 use crate::solid::section::{Plane, plane_section};
+use crate::synth::components::components;
 
 #[derive(Clone, Debug)]
 pub struct Cells {
@@ -156,66 +157,13 @@ impl Cells {
     pub fn pieces_and_holes(&self, speck: usize) -> (usize, usize) {
         let pieces = components(&self.inside, self.w, self.h, false)
             .into_iter()
-            .filter(|c| c.size >= speck)
+            .filter(|c| c.cells.len() >= speck)
             .count();
         let outside: Vec<bool> = self.inside.iter().map(|&b| !b).collect();
         let holes = components(&outside, self.w, self.h, true)
             .into_iter()
-            .filter(|c| !c.touches_border && c.size >= speck)
+            .filter(|c| !c.touches_border && c.cells.len() >= speck)
             .count();
         (pieces, holes)
     }
-}
-
-struct Component {
-    size: usize,
-    touches_border: bool,
-}
-
-/// Connected components of the `true` cells, by flood fill.
-fn components(set: &[bool], w: usize, h: usize, diagonal: bool) -> Vec<Component> {
-    let mut seen = vec![false; w * h];
-    let mut out = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..w * h {
-        if !set[start] || seen[start] {
-            continue;
-        }
-        seen[start] = true;
-        stack.push(start);
-        let mut c = Component {
-            size: 0,
-            touches_border: false,
-        };
-        while let Some(i) = stack.pop() {
-            c.size += 1;
-            let (x, y) = ((i % w) as isize, (i / w) as isize);
-            c.touches_border |= x == 0 || y == 0 || x as usize == w - 1 || y as usize == h - 1;
-            for (dx, dy) in [
-                (1, 0),
-                (-1, 0),
-                (0, 1),
-                (0, -1),
-                (1, 1),
-                (1, -1),
-                (-1, 1),
-                (-1, -1),
-            ]
-            .into_iter()
-            .take(if diagonal { 8 } else { 4 })
-            {
-                let (nx, ny) = (x + dx, y + dy);
-                if nx < 0 || ny < 0 || nx as usize >= w || ny as usize >= h {
-                    continue;
-                }
-                let j = ny as usize * w + nx as usize;
-                if set[j] && !seen[j] {
-                    seen[j] = true;
-                    stack.push(j);
-                }
-            }
-        }
-        out.push(c);
-    }
-    out
 }

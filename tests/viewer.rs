@@ -104,6 +104,34 @@ fn the_clinician_flow() {
     settle(&mut h);
     let doc = h.state().doc.as_ref().unwrap();
     assert_eq!(doc.settings((0, 1)).texture, "colon-mucosa");
+    // The shelf shows one kind at a time: histology on the interior
+    // shelf, vessel overlays on the overlay shelf, laid over the facet and
+    // taken off again.
+    assert!(h.query_by_label("Smooth muscle (H&E)").is_none());
+    h.get_by_label_contains("Interior (").click();
+    h.run_steps(2);
+    assert!(h.query_by_label("Smooth muscle (H&E)").is_some());
+    assert!(h.query_by_label("Colonic mucosa").is_none());
+    h.get_by_label_contains("Overlay (").click();
+    h.run_steps(2);
+    let overlay = |h: &Harness<'static, Viewer>| {
+        h.state()
+            .doc
+            .as_ref()
+            .unwrap()
+            .settings((0, 1))
+            .overlay
+            .clone()
+    };
+    h.get_by_label("Mesentery vessels").click();
+    settle(&mut h);
+    assert_eq!(overlay(&h).as_deref(), Some("serosa-vessels"));
+    h.get_by_label("Mesentery vessels").click();
+    settle(&mut h);
+    assert_eq!(overlay(&h), None, "a second click takes the overlay off");
+    h.get_by_label_contains("Surface (").click();
+    h.run_steps(2);
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
     // The facet's seams-against-stretch bound is at hand.
     assert!(
         h.query_all_by_label_contains("max stretch")

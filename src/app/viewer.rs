@@ -157,6 +157,8 @@ pub struct Viewer {
     cut_made: Option<([f64; 3], f64)>,
     pub message: Option<Message>,
     tissues: Vec<TissueEntry>,
+    /// The shelf the tissue panel shows.
+    shelf: Shelf,
     dialog: Option<FileDialog>,
     jobs: Jobs,
     /// Bumped by every change that alters the picture; a target whose
@@ -223,6 +225,7 @@ impl Viewer {
             cut_made: None,
             message: None,
             tissues: Vec::new(),
+            shelf: Shelf::Surface,
             dialog: None,
             jobs: Jobs::default(),
             generation: 0,
@@ -1022,51 +1025,54 @@ impl Viewer {
             self.unwrap();
         }
         ui.separator();
-        ui.label("Tissue");
+        ui.horizontal(|ui| {
+            ui.label("Tissue");
+            for shelf in Shelf::ALL {
+                let count = self.tissues.iter().filter(|t| t.shelf == shelf).count();
+                ui.selectable_value(&mut self.shelf, shelf, format!("{} ({count})", shelf.title()))
+                    .on_hover_text(match shelf {
+                        Shelf::Surface => "textures for organ surfaces: click to give one to the selected facet",
+                        Shelf::Interior => "histology for cut surfaces and the inside: click to give one to the selected facet",
+                        Shelf::Overlay => "vessel overlays: click to lay one over the selected facet, again to take it off",
+                    });
+            }
+        });
         let current = self
             .selected
             .and_then(|f| self.doc.as_ref().map(|d| d.settings(f).clone()));
+        let shelf = self.shelf;
         let mut pick = None;
         // The shelf scrolls on its own, so the texture's settings and the
         // cut plane below it stay in view however many tissues there are.
         egui::ScrollArea::vertical()
             .id_salt("tissue shelf")
-            .max_height(200.0)
+            .max_height(192.0)
             .show(ui, |ui| {
-                for shelf in Shelf::ALL {
-                    let on_shelf: Vec<&TissueEntry> =
-                        self.tissues.iter().filter(|t| t.shelf == shelf).collect();
-                    if on_shelf.is_empty() {
-                        continue;
-                    }
-                    ui.label(egui::RichText::new(shelf.title()).small().strong());
-                    egui::Grid::new(("tissues", shelf.title()))
-                        .num_columns(2)
-                        .show(ui, |ui| {
-                            for (i, t) in on_shelf.into_iter().enumerate() {
-                                let on = current.as_ref().is_some_and(|s| match shelf {
-                                    Shelf::Overlay => s.overlay.as_deref() == Some(t.id.as_str()),
-                                    _ => s.texture == t.id,
-                                });
-                                let r = match &t.thumbnail {
-                                    Some(tex) => ui.add(
-                                        egui::Button::image_and_text(
-                                            egui::Image::new((tex.id(), egui::vec2(40.0, 40.0))),
-                                            &t.name,
-                                        )
-                                        .selected(on),
-                                    ),
-                                    None => ui.add(egui::Button::new(&t.name).selected(on)),
-                                };
-                                if r.on_hover_text(&t.credit).clicked() {
-                                    pick = Some((t.id.clone(), shelf));
-                                }
-                                if i % 2 == 1 {
-                                    ui.end_row();
-                                }
-                            }
+                egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
+                    let on_shelf = self.tissues.iter().filter(|t| t.shelf == shelf);
+                    for (i, t) in on_shelf.enumerate() {
+                        let on = current.as_ref().is_some_and(|s| match shelf {
+                            Shelf::Overlay => s.overlay.as_deref() == Some(t.id.as_str()),
+                            _ => s.texture == t.id,
                         });
-                }
+                        let r = match &t.thumbnail {
+                            Some(tex) => ui.add(
+                                egui::Button::image_and_text(
+                                    egui::Image::new((tex.id(), egui::vec2(40.0, 40.0))),
+                                    &t.name,
+                                )
+                                .selected(on),
+                            ),
+                            None => ui.add(egui::Button::new(&t.name).selected(on)),
+                        };
+                        if r.on_hover_text(&t.credit).clicked() {
+                            pick = Some((t.id.clone(), shelf));
+                        }
+                        if i % 2 == 1 {
+                            ui.end_row();
+                        }
+                    }
+                });
             });
         match pick {
             Some((id, Shelf::Overlay)) => self.pick_overlay(&id),

@@ -330,24 +330,42 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     );
     let r = &baked.report;
     assert_eq!(r.mode, "layered");
-    // The uterus's interior: a block that tiles, at the scene's scale.
+    // The uterus's interior: a block layered by depth from the
+    // database's layered wall (issue 28), at the scene's scale. It tiles
+    // across the layers (x, z); along y its rows follow the exemplar's,
+    // and the file says y is depth.
     assert_eq!(r.interiors.len(), 1);
     let interior = &r.interiors[0];
     assert_eq!((interior.node.as_str(), interior.voxels), ("uterus", 64));
-    let block = Volume::read_nrrd(&out.path().join(&interior.file)).unwrap();
-    assert_eq!(block.size, [64; 3]);
+    assert_eq!(
+        (interior.texture.as_str(), interior.method),
+        ("layered-wall", InteriorMethod::Layered)
+    );
+    let (block, depth_axis) =
+        Volume::read_nrrd_with_depth(&out.path().join(&interior.file)).unwrap();
+    assert_eq!((block.size, depth_axis), ([64; 3], Some(1)));
     assert!(
         (block.spacing - 10.0 / 64.0).abs() < 1e-12,
         "{}",
         block.spacing
     );
-    for axis in 0..3 {
+    for axis in [0, 2] {
         assert!(
             block.seam(axis) <= 1.15,
             "axis {axis}: {}",
             block.seam(axis)
         );
     }
+    let wall = organtex::synth::exemplar::Exemplar::load(
+        &root().join("database/build/layered-wall/layers.png"),
+        None,
+        None,
+    )
+    .unwrap()
+    .with_height(64)
+    .unwrap();
+    let layers = organtex::synth::block::layered::measure_layered(&block, &wall, 4);
+    assert!(layers.rows_rms <= 8.0, "{layers:?}");
     // And the wall as tetrahedra (tet_mesh = true), within the proven
     // angles and 1% of the wall's surface.
     let t = interior
@@ -793,6 +811,13 @@ fn the_scene_chooses_how_its_interior_is_synthesised() {
     assert_eq!(blocks[1], blocks[0]);
     assert_eq!(blocks[2].0, InteriorMethod::Optimize);
     assert_ne!(blocks[2].1, blocks[0].1);
+    // A layered block needs a tissue with a layered exemplar.
+    let (err, _) =
+        bake_error(&base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"layered\""));
+    assert!(
+        err.contains("tissue 'ihc-glands' has no Layers output"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -70,6 +70,9 @@ struct TissueEntry {
     shelf: Shelf,
     /// Licence and credit line, shown on hover.
     credit: String,
+    /// Whether it makes a colour texture a facet can wear (a layered
+    /// exemplar alone does not).
+    colour: bool,
     thumbnail: Option<egui::TextureHandle>,
 }
 
@@ -79,6 +82,7 @@ struct ShelfItem {
     name: String,
     shelf: Shelf,
     credit: String,
+    colour: bool,
     thumbnail: Option<egui::ColorImage>,
 }
 
@@ -489,6 +493,7 @@ impl Viewer {
                             name: t.name,
                             shelf: t.shelf,
                             credit: t.credit,
+                            colour: t.colour,
                         })
                         .collect()
                 }
@@ -660,7 +665,7 @@ impl Viewer {
                     32
                 };
                 let block = interior_block(
-                    &db.output_path(&tissue, crate::db::Output::Colour),
+                    &db.output_path(&tissue, method.output()),
                     &photographs,
                     size,
                     method,
@@ -1066,7 +1071,7 @@ impl Viewer {
                             None => ui.add(egui::Button::new(&t.name).selected(on)),
                         };
                         if r.on_hover_text(&t.credit).clicked() {
-                            pick = Some((t.id.clone(), shelf));
+                            pick = Some((t.id.clone(), shelf, t.colour));
                         }
                         if i % 2 == 1 {
                             ui.end_row();
@@ -1075,8 +1080,13 @@ impl Viewer {
                 });
             });
         match pick {
-            Some((id, Shelf::Overlay)) => self.pick_overlay(&id),
-            Some((id, _)) => self.pick_tissue(&id),
+            Some((id, Shelf::Overlay, _)) => self.pick_overlay(&id),
+            Some((id, _, true)) => self.pick_tissue(&id),
+            Some((id, _, false)) => self.error(format!(
+                "'{id}' is a layered exemplar for interiors, not a facet's texture: \
+                 a scene lays it through a node with [node.interior] texture = \"{id}\", \
+                 method = \"layered\""
+            )),
             None => {}
         }
         if let (Some(f), Some(doc)) = (self.selected, &self.doc) {
@@ -1404,11 +1414,10 @@ fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
         .tissues
         .iter()
         .map(|t| {
-            let output = if t.outputs.contains(&Output::Colour) {
-                Output::Colour
-            } else {
-                Output::Overlay
-            };
+            let output = [Output::Colour, Output::Layers, Output::Overlay]
+                .into_iter()
+                .find(|o| t.outputs.contains(o))
+                .unwrap_or(Output::Colour);
             let built = db.output_path(&t.id, output);
             let path = if built.exists() {
                 built
@@ -1432,6 +1441,7 @@ fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
                 name: t.name.clone(),
                 shelf: t.shelf(),
                 credit,
+                colour: t.outputs.contains(&Output::Colour),
                 thumbnail,
             }
         })

@@ -126,16 +126,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         DbCommand::Exemplar { id, output } => {
             let ex = exemplar(&db, db.tissue(&id)?)?;
-            let raw = ex
-                .pixels
-                .iter()
-                .zip(&ex.valid)
-                .flat_map(|(p, &v)| [p[0], p[1], p[2], if v { 255 } else { 0 }])
-                .collect();
-            // One RGBA pixel per exemplar pixel: the buffer always fits.
-            let img =
-                image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");
-            organtex::atomic::write_png(&output, &image::DynamicImage::ImageRgba8(img))?;
+            organtex::atomic::write_png(&output, &organtex::db::build::rgba(&ex))?;
             println!("{}", output.display());
         }
     }

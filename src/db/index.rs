@@ -10,7 +10,9 @@
 //! shelf = "surface"                 # optional: surface, interior or
 //!                                   # overlay, the viewer's shelf it is
 //!                                   # shown on (default: overlay for an
-//!                                   # overlay-only entry, else surface)
+//!                                   # overlay-only entry, interior for
+//!                                   # layers without colour, else
+//!                                   # surface)
 //! source = "sources/retina.jpg"     # relative to the database folder
 //! crop = { x = 250, y = 250, width = 900, height = 900 }   # optional
 //! mask = "masks/x.png"              # optional: white usable
@@ -18,10 +20,12 @@
 //! lighting = "flatten"              # optional: divide out uneven lighting
 //! licence = "CC BY 4.0"             # optional: the source's licence
 //! credit = "..."                    # optional: its credit line
-//! outputs = ["colour", "height"]    # colour, height, overlay
+//! outputs = ["colour", "height"]    # colour, height, overlay, layers
 //!                                   # (overlay: a tileable vessel tree
 //!                                   # in the photo's vessel colour and
-//!                                   # coverage, `synth::vessel_tree`)
+//!                                   # coverage, `synth::vessel_tree`;
+//!                                   # layers: the crop itself, its rows
+//!                                   # depths, for layered interiors)
 //! [tissue.synthesis]                # for colour and height
 //! width = 512
 //! height = 512
@@ -57,6 +61,11 @@ pub enum Output {
     Height,
     /// An RGBA vessel overlay from the (cropped) photograph.
     Overlay,
+    /// A layered exemplar, rows = depth, top = outer: the crop as prepared
+    /// (lighting flattened where asked, mask in the alpha channel), not
+    /// resynthesised, for interiors layered by depth (`[node.interior]
+    /// method = "layered"`, seed 002, 4.2).
+    Layers,
 }
 
 impl Output {
@@ -65,6 +74,7 @@ impl Output {
             Output::Colour => "colour.png",
             Output::Height => "height.png",
             Output::Overlay => "overlay.png",
+            Output::Layers => "layers.png",
         }
     }
 }
@@ -129,10 +139,14 @@ pub struct Tissue {
 
 impl Tissue {
     /// The shelf the entry is shown on: as stated, else overlay for an
-    /// entry that only makes an overlay, else surface.
+    /// entry that only makes an overlay, interior for a layered exemplar
+    /// without a colour texture, else surface.
     pub fn shelf(&self) -> Shelf {
         self.shelf.unwrap_or(if self.outputs == [Output::Overlay] {
             Shelf::Overlay
+        } else if !self.outputs.contains(&Output::Colour) && self.outputs.contains(&Output::Layers)
+        {
+            Shelf::Interior
         } else {
             Shelf::Surface
         })

@@ -342,7 +342,10 @@ pub fn bake(
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
-        interior.volume.write_nrrd(&path)?;
+        // A layered block's y axis is depth: the header says so, for the
+        // LST reader and other tools.
+        let depth_axis = (interior.line.method == InteriorMethod::Layered).then_some(1);
+        interior.volume.write_nrrd_with_depth(&path, depth_axis)?;
         if let (Some(line), Some(tets)) = (&interior.line.tet_mesh, &interior.tets) {
             crate::tetra::io::write_vtk(&out.join(&line.file), tets)?;
         }
@@ -358,7 +361,8 @@ pub fn bake(
 }
 
 /// Every node's interior block, synthesised from its tissue's colour
-/// texture (seed 004, 3.3), `[bake] interior_voxels` a side.
+/// texture (seed 004, 3.3) or layered exemplar (seed 002, 4.2),
+/// `[bake] interior_voxels` a side.
 fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior>> {
     let n = scene.spec.bake.interior_voxels;
     let mut out = Vec::new();
@@ -370,7 +374,11 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
             out.push(morphed(scene, k, interior, n, &out, progress)?);
             continue;
         }
-        let colour = scene.tissues.colour.get(&interior.texture).ok_or_else(|| {
+        let built = match interior.method {
+            InteriorMethod::Layered => &scene.tissues.layers,
+            _ => &scene.tissues.colour,
+        };
+        let colour = built.get(&interior.texture).ok_or_else(|| {
             Error::invalid(format!(
                 "node '{}': interior texture '{}' was not built",
                 node.name, interior.texture

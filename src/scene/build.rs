@@ -59,6 +59,7 @@ pub struct Tissues {
     pub colour: HashMap<String, std::path::PathBuf>,
     pub height: HashMap<String, std::path::PathBuf>,
     pub overlay: HashMap<String, std::path::PathBuf>,
+    pub layers: HashMap<String, std::path::PathBuf>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -136,7 +137,7 @@ pub fn ensure_tissues(
             }
         }
         if let Some(interior) = node.interior.as_ref().filter(|i| !i.texture.is_empty()) {
-            needed.push((interior.texture.clone(), Output::Colour));
+            needed.push((interior.texture.clone(), interior.method.output()));
         }
     }
     let mut tissues = Tissues::default();
@@ -161,6 +162,7 @@ pub fn ensure_tissues(
             Output::Colour => &mut tissues.colour,
             Output::Height => &mut tissues.height,
             Output::Overlay => &mut tissues.overlay,
+            Output::Layers => &mut tissues.layers,
         };
         map.insert(id.clone(), database.output_path(id, *output));
     }

@@ -129,6 +129,7 @@ pub struct Interior {
     #[serde(default = "default_block_size")]
     pub block_size: f64,
     /// How the block is made: "fnpts" (sharp; streaks on cuts across x),
+    /// "layered" (by depth from the tissue's layered exemplar, seed 002),
     /// "optimize" (no streaks, softer) or "stereology" (particles in a
     /// binder measured in `photographs`, seed 001) or "morph" (morphed
     /// from the photographed cuts of `sections`, seed 003).

@@ -66,6 +66,11 @@ pub enum InteriorMethod {
     /// Morphed on demand from photographs of a few cuts placed as planes
     /// in the node (seed 003, `solid::morph`); no block of its own.
     Morph,
+    /// A layered block (seed 002, 4.2) from the tissue's layered exemplar
+    /// (rows = depth, top = outer; the database's `layers` output), its y
+    /// axis depth: what a type 1b or 2b lapped solid texture lays through
+    /// the wall from the outer facet to the inner one.
+    Layered,
 }
 
 impl InteriorMethod {
@@ -74,14 +79,23 @@ impl InteriorMethod {
         match self {
             InteriorMethod::Fnpts => Some(Method::Fnpts),
             InteriorMethod::Optimize => Some(Method::Optimize),
-            InteriorMethod::Stereology | InteriorMethod::Morph => None,
+            InteriorMethod::Stereology | InteriorMethod::Morph | InteriorMethod::Layered => None,
+        }
+    }
+
+    /// The database output the block is made from.
+    pub fn output(self) -> crate::db::Output {
+        match self {
+            InteriorMethod::Layered => crate::db::Output::Layers,
+            _ => crate::db::Output::Colour,
         }
     }
 }
 
 /// A `size`^3 block by `method`: from the colour texture at `colour`, or
 /// for stereology from `photographs` (the colour texture where none are
-/// given).
+/// given), or for a layered block from the layered exemplar at `colour`
+/// (scaled to `size` rows, the block's depth along y).
 pub fn interior_block(
     colour: &Path,
     photographs: &[PathBuf],
@@ -95,6 +109,18 @@ pub fn interior_block(
             "a morphed interior is made from the node's mesh and sections file \
              (solid::morph::Morph), not as a block",
         ));
+    }
+    if method == InteriorMethod::Layered {
+        let exemplar = Exemplar::load(colour, None, None)?
+            .with_height(size)
+            .map_err(|e| e.in_file(colour))?;
+        let opts = crate::synth::block::layered::LayeredOptions {
+            size,
+            seed,
+            ..Default::default()
+        };
+        return crate::synth::block::layered::synthesize_layered(&exemplar, &opts, progress)
+            .map_err(|e| e.in_file(colour));
     }
     let Some(method) = method.block() else {
         let paths = if photographs.is_empty() {

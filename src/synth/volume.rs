@@ -127,8 +127,17 @@ impl Volume {
     /// where it starts is where copies meet when tiled: roll it along each
     /// axis so the tile faces fall where neighbouring planes differ least.
     pub fn rolled_to_smoothest_wrap(self) -> Volume {
+        self.rolled_to_smoothest_wrap_along([true; 3])
+    }
+
+    /// `rolled_to_smoothest_wrap` along the axes marked only (a layered
+    /// block keeps its depth axis where it is: its top is the outer layer).
+    pub fn rolled_to_smoothest_wrap_along(self, axes: [bool; 3]) -> Volume {
         let shift: [usize; 3] = std::array::from_fn(|axis| {
             let n = self.size[axis];
+            if !axes[axis] {
+                return 0;
+            }
             // Cutting between planes i and i + 1 starts the block at i + 1.
             let jumps: Vec<f64> = (0..n).map(|i| self.plane_jump(axis, i)).collect();
             let cut = (0..n)

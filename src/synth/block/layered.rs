@@ -152,11 +152,14 @@ pub fn synthesize_layered(
         state = Some(block);
     }
     let block = state.expect("at least one level");
+    // Tiles meet where neighbouring planes differ least across x and z;
+    // y, depth, stays.
     Ok(Volume {
         size: [n; 3],
         spacing: 1.0,
         voxels: block.colour,
-    })
+    }
+    .rolled_to_smoothest_wrap_along([true, false, true]))
 }
 
 /// The synthesis state at one level: an n^3 block, x fastest, y depth.

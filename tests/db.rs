@@ -162,3 +162,46 @@ fn every_source_is_licensed_and_every_shelf_stocked() {
         );
     }
 }
+
+#[test]
+fn a_shelf_that_does_not_fit_the_outputs_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sources")).unwrap();
+    std::fs::copy(
+        shipped().join("sources/layered_wall.png"),
+        dir.path().join("sources/wall.png"),
+    )
+    .unwrap();
+    let index = |shelf: &str, outputs: &str| {
+        std::fs::write(
+            dir.path().join("index.toml"),
+            format!(
+                "[[tissue]]\nid = \"wall\"\nname = \"Wall\"\nkind = \"layered wall\"\n\
+                 source = \"sources/wall.png\"\n{shelf}outputs = [{outputs}]\n"
+            ),
+        )
+        .unwrap();
+        Database::open(dir.path())
+    };
+    // A layered exemplar goes on the interior shelf by itself, and builds
+    // its layers output: the exemplar unchanged.
+    let db = index("", "\"layers\"").unwrap();
+    assert_eq!(db.tissue("wall").unwrap().shelf(), Shelf::Interior);
+    build(&db, &[], &Silent).unwrap();
+    let layers = image::open(db.output_path("wall", Output::Layers)).unwrap();
+    let source = image::open(dir.path().join("sources/wall.png")).unwrap();
+    assert_eq!(layers.to_rgb8(), source.to_rgb8());
+    for (shelf, outputs) in [
+        ("shelf = \"surface\"\n", "\"layers\""),
+        ("shelf = \"overlay\"\n", "\"layers\""),
+        ("shelf = \"interior\"\n", "\"overlay\""),
+    ] {
+        let err = index(shelf, outputs).unwrap_err().to_string();
+        assert!(
+            err.contains("tissue 'wall': shelf = ")
+                && err.contains(&format!("outputs [{outputs}]")),
+            "{err}"
+        );
+        assert!(err.contains("index.toml"), "{err}");
+    }
+}

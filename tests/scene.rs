@@ -815,7 +815,7 @@ fn the_scene_chooses_how_its_interior_is_synthesised() {
     let (err, _) =
         bake_error(&base.replace("block_size = 5.0", "block_size = 5.0\nmethod = \"layered\""));
     assert!(
-        err.contains("tissue 'ihc-glands' has no Layers output"),
+        err.contains("tissue 'ihc-glands' has no \"layers\" output"),
         "{err}"
     );
 }

@@ -1080,6 +1080,9 @@ impl Viewer {
                 });
             });
         match pick {
+            Some(_) if self.selected.is_none() => {
+                self.error("select a facet first (the list above): the tissue goes on it")
+            }
             Some((id, Shelf::Overlay, _)) => self.pick_overlay(&id),
             Some((id, _, true)) => self.pick_tissue(&id),
             Some((id, _, false)) => self.error(format!(

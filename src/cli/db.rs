@@ -83,7 +83,9 @@ pub fn run(args: Args) -> Result<()> {
                     .outputs
                     .iter()
                     .all(|&o| db.output_path(&t.id, o).is_file());
-                let built = match (built, built && is_current(&db, t)?) {
+                // A source that cannot be read is the build's error to
+                // report; the list goes on.
+                let built = match (built, built && is_current(&db, t).unwrap_or(false)) {
                     (false, _) => "no",
                     (true, false) => "out of date",
                     (true, true) => "yes",

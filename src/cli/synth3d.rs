@@ -177,7 +177,8 @@ fn run_layered(args: &Args) -> Result<()> {
     // Scaling up by more than 2 would invent the layers' detail.
     if 2 * exemplar.height < n {
         return Err(Error::invalid(format!(
-            "has {} rows; a layered block of {n} voxels takes its depth from at least {} of              them (scaling up more invents detail): give a smaller --size or a taller image",
+            "has {} rows; a layered block of {n} voxels takes its depth from at least {} of \
+             them (scaling up more invents detail): give a smaller --size or a taller image",
             exemplar.height,
             n.div_ceil(2)
         ))

@@ -57,8 +57,22 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
         }
     };
     feed(&RECIPE.to_le_bytes());
-    // Plain fields with string keys: serialising cannot fail.
-    feed(serde_json::to_string(t).expect("serialises").as_bytes());
+    // The recipe's fields only: the name, kind, shelf, licence and credit
+    // label the outputs without changing them. Plain fields with string
+    // keys: serialising cannot fail.
+    let recipe = Tissue {
+        name: String::new(),
+        kind: String::new(),
+        shelf: None,
+        licence: None,
+        credit: None,
+        ..t.clone()
+    };
+    feed(
+        serde_json::to_string(&recipe)
+            .expect("serialises")
+            .as_bytes(),
+    );
     for file in std::iter::once(&t.source).chain(t.mask.as_ref()) {
         let path = db.root.join(file);
         feed(&std::fs::read(&path).map_err(|e| Error::io(&path, e))?);

@@ -69,6 +69,16 @@ pub enum Output {
 }
 
 impl Output {
+    /// As `outputs` in index.toml names it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Output::Colour => "colour",
+            Output::Height => "height",
+            Output::Overlay => "overlay",
+            Output::Layers => "layers",
+        }
+    }
+
     pub fn file_name(self) -> &'static str {
         match self {
             Output::Colour => "colour.png",
@@ -233,11 +243,18 @@ impl Database {
                 return Err(fail("no outputs".into()));
             }
             let overlay_only = t.outputs == [Output::Overlay];
-            if overlay_only != (t.shelf() == Shelf::Overlay) {
+            let colour = t.outputs.contains(&Output::Colour);
+            let shelf = t.shelf();
+            if overlay_only != (shelf == Shelf::Overlay) || (shelf == Shelf::Surface && !colour) {
                 return Err(fail(format!(
-                    "shelf = \"{}\" does not fit outputs {:?}: the overlay shelf holds the entries that make an overlay alone",
-                    t.shelf().title().to_lowercase(),
+                    "shelf = \"{}\" does not fit outputs [{}]: the overlay shelf holds the entries \
+                     that make an overlay alone, the surface shelf those with a colour texture",
+                    shelf.title().to_lowercase(),
                     t.outputs
+                        .iter()
+                        .map(|o| format!("\"{}\"", o.name()))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )));
             }
         }

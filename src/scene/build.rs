@@ -146,8 +146,15 @@ pub fn ensure_tissues(
         let t = database.tissue(id)?;
         if !t.outputs.contains(output) {
             return Err(Error::invalid(format!(
-                "{}: tissue '{id}' has no {output:?} output; add it to its `outputs`",
-                database.root.join("index.toml").display()
+                "{}: tissue '{id}' has no \"{}\" output; add it to its `outputs`{}",
+                database.root.join("index.toml").display(),
+                output.name(),
+                match output {
+                    Output::Colour if t.outputs.contains(&Output::Layers) => {
+                        " (it is a layered exemplar: an interior uses it with method = \"layered\")"
+                    }
+                    _ => "",
+                }
             )));
         }
         // Once per entry: checking reads its sources, building makes all

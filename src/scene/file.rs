@@ -352,8 +352,12 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
         .iter()
         .map(|i| {
             // Stereology copies its photograph by guided FNPTS; a morph
-            // samples its block at the same size (counted as the same).
-            let method = i.method.block().unwrap_or(Method::Fnpts);
+            // samples its block at the same size (counted as the same); a
+            // layered block optimises, as `synth3d --layered` counts it.
+            let method = match i.method {
+                InteriorMethod::Layered => Method::Optimize,
+                m => m.block().unwrap_or(Method::Fnpts),
+            };
             block_bytes(spec.bake.interior_voxels, 1, method)
         })
         .max()

@@ -111,9 +111,19 @@ pub fn interior_block(
         ));
     }
     if method == InteriorMethod::Layered {
-        let exemplar = Exemplar::load(colour, None, None)?
-            .with_height(size)
-            .map_err(|e| e.in_file(colour))?;
+        let exemplar = Exemplar::load(colour, None, None)?;
+        // As `synth3d --layered`: scaling up by more than 2 would invent
+        // the layers' detail.
+        if 2 * exemplar.height < size {
+            return Err(crate::error::Error::invalid(format!(
+                "the layered exemplar has {} rows; a layered block of {size} voxels takes its \
+                 depth from at least {} of them: ask for fewer interior voxels or a taller exemplar",
+                exemplar.height,
+                size.div_ceil(2)
+            ))
+            .in_file(colour));
+        }
+        let exemplar = exemplar.with_height(size).map_err(|e| e.in_file(colour))?;
         let opts = crate::synth::block::layered::LayeredOptions {
             size,
             seed,

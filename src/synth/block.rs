@@ -35,7 +35,10 @@ mod optimize;
 use rayon::prelude::*;
 
 use super::exemplar::Exemplar;
-use super::fnpts::{ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, check_search, window};
+use super::fnpts::{
+    ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, check_search, losing_match, penalised,
+    window,
+};
 use super::volume::Volume;
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
@@ -66,7 +69,8 @@ pub struct BlockOptions {
     pub levels: Option<usize>,
     /// Side of each square plane neighbourhood (odd).
     pub neighbourhood: usize,
-    /// Weight of FNPTS's occurrence cost (0: the paper's cost alone).
+    /// Weight of FNPTS's occurrence penalty, which multiplies a candidate's
+    /// cost as in 2D (0: the paper's cost alone).
     pub occurrence: f64,
     pub method: Method,
 }
@@ -756,7 +760,7 @@ impl<'a> Block<'a> {
     }
 
     /// FNPTS: the coordinate whose three plane neighbourhoods cost least
-    /// in sum, plus the occurrence cost.
+    /// in sum, times the occurrence penalty.
     fn best_shared(
         &self,
         v: usize,
@@ -792,7 +796,6 @@ impl<'a> Block<'a> {
         );
         let xyz = self.grid.xyz(v);
         let blocks: [_; 3] = std::array::from_fn(|a| gather(&views[a], a, xyz, window));
-        let m = opts.iterations as i64;
         let mismatch = |c: u32| match (&src.classes, &self.guide) {
             (Some((of, _)), Some(g)) if of[c as usize] != g.block[v] => g.penalty,
             _ => 0,
@@ -800,20 +803,22 @@ impl<'a> Block<'a> {
         let mut best = (i64::MAX, candidates[0]);
         for &c in &candidates {
             // Copies of this coordinate beyond its even share, not counting
-            // this voxel's own.
+            // this voxel's own; the penalty multiplies the cost, as in 2D.
             let own = (self.coord[0][v] == c) as u32 as f64;
             let over =
                 (self.usage[c as usize] as f64 - own - self.share).max(0.0) / self.share.max(1.0);
-            let mut cost =
-                (opts.occurrence * over * (MAX_PIXEL_COST * m) as f64) as i64 + mismatch(c);
+            let factor = 1.0 + opts.occurrence * over;
+            let limit = losing_match(best.0, factor);
+            let mut cost = mismatch(c);
             let s = src.split(c);
             for (a, view) in views.iter().enumerate() {
                 let e = &src.ex[src.of_axis[a]];
-                cost = plane_cost(src, e, &blocks[a], s, window, view.missing, cost, best.0);
-                if cost >= best.0 {
+                cost = plane_cost(src, e, &blocks[a], s, window, view.missing, cost, limit);
+                if cost >= limit {
                     break;
                 }
             }
+            let cost = penalised(cost, factor);
             if cost < best.0 {
                 best = (cost, c);
             }

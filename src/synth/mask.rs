@@ -59,9 +59,10 @@ pub fn apply(ex: &mut Exemplar, rules: &[MaskRule]) {
                 let v = vesselness(ex, &scales);
                 let (low, _) = threshold_range(&v);
                 let vessel: Vec<bool> = v.iter().map(|&x| x >= low).collect();
-                // A vessel is long: pieces shorter than 2% of the side are
-                // the noise's response, and masking them would riddle the
-                // exemplar with holes no neighbourhood can be copied across.
+                // A vessel is long: pieces of fewer pixels than 2% of the
+                // side are the noise's response, and masking them would
+                // riddle the exemplar with holes no neighbourhood can be
+                // copied across.
                 let vessel = without_specks(&vessel, w, h, (0.02 * side).ceil() as usize);
                 dilate(&vessel, w, h, (0.0015 * side).ceil() as usize)
             }

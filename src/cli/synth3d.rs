@@ -64,7 +64,9 @@ pub struct Args {
     /// Side of each plane's square neighbourhood (odd).
     #[arg(long, default_value_t = 5)]
     neighbourhood: usize,
-    /// Weight of the occurrence cost (FNPTS; 0: the paper's cost alone).
+    /// Weight of the occurrence penalty, which multiplies a candidate's cost
+    /// by 1 + this x how far its source is over-used (FNPTS; 0: the paper's
+    /// cost alone).
     #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Edge length of a voxel in object units, written to the NRRD.

@@ -64,29 +64,14 @@ pub struct Message {
     pub error: bool,
 }
 
+/// A database entry on the tissue shelf, with its thumbnail.
 struct TissueEntry {
-    id: String,
-    name: String,
-    shelf: Shelf,
-    /// Licence and credit line, shown on hover.
-    credit: String,
-    /// Whether it makes a colour texture a facet can wear (a layered
-    /// exemplar alone does not).
-    colour: bool,
+    tissue: crate::db::Tissue,
     thumbnail: Option<egui::TextureHandle>,
 }
 
-/// A tissue for the shelf, as read off the database by a background job.
-struct ShelfItem {
-    id: String,
-    name: String,
-    shelf: Shelf,
-    credit: String,
-    colour: bool,
-    thumbnail: Option<egui::ColorImage>,
-}
-
-type Thumbnails = Vec<ShelfItem>;
+/// Every entry and its thumbnail's pixels, as a background job reads them.
+type Thumbnails = Vec<(crate::db::Tissue, Option<egui::ColorImage>)>;
 
 /// What the cut plane shows inside: the interior block, and per node its
 /// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
@@ -481,19 +466,15 @@ impl Viewer {
                 Ok(list) => {
                     self.tissues = list
                         .into_iter()
-                        .map(|t| TissueEntry {
-                            thumbnail: t.thumbnail.map(|i| {
+                        .map(|(tissue, img)| TissueEntry {
+                            thumbnail: img.map(|i| {
                                 self.ctx.load_texture(
-                                    format!("tissue:{}", t.id),
+                                    format!("tissue:{}", tissue.id),
                                     i,
                                     Default::default(),
                                 )
                             }),
-                            id: t.id,
-                            name: t.name,
-                            shelf: t.shelf,
-                            credit: t.credit,
-                            colour: t.colour,
+                            tissue,
                         })
                         .collect()
                 }
@@ -1033,7 +1014,11 @@ impl Viewer {
         ui.horizontal(|ui| {
             ui.label("Tissue");
             for shelf in Shelf::ALL {
-                let count = self.tissues.iter().filter(|t| t.shelf == shelf).count();
+                let count = self
+                    .tissues
+                    .iter()
+                    .filter(|t| t.tissue.shelf() == shelf)
+                    .count();
                 ui.selectable_value(&mut self.shelf, shelf, format!("{} ({count})", shelf.title()))
                     .on_hover_text(match shelf {
                         Shelf::Surface => "textures for organ surfaces: click to give one to the selected facet",
@@ -1054,13 +1039,20 @@ impl Viewer {
             .max_height(192.0)
             .show(ui, |ui| {
                 egui::Grid::new("tissues").num_columns(2).show(ui, |ui| {
-                    let on_shelf = self.tissues.iter().filter(|t| t.shelf == shelf);
-                    for (i, t) in on_shelf.enumerate() {
+                    let on_shelf = self.tissues.iter().filter(|t| t.tissue.shelf() == shelf);
+                    for (
+                        i,
+                        TissueEntry {
+                            tissue: t,
+                            thumbnail,
+                        },
+                    ) in on_shelf.enumerate()
+                    {
                         let on = current.as_ref().is_some_and(|s| match shelf {
                             Shelf::Overlay => s.overlay.as_deref() == Some(t.id.as_str()),
                             _ => s.texture == t.id,
                         });
-                        let r = match &t.thumbnail {
+                        let r = match thumbnail {
                             Some(tex) => ui.add(
                                 egui::Button::image_and_text(
                                     egui::Image::new((tex.id(), egui::vec2(40.0, 40.0))),
@@ -1070,8 +1062,12 @@ impl Viewer {
                             ),
                             None => ui.add(egui::Button::new(&t.name).selected(on)),
                         };
-                        if r.on_hover_text(&t.credit).clicked() {
-                            pick = Some((t.id.clone(), shelf, t.colour));
+                        if r.on_hover_text(t.credit_line()).clicked() {
+                            pick = Some((
+                                t.id.clone(),
+                                shelf,
+                                t.outputs.contains(&crate::db::Output::Colour),
+                            ));
                         }
                         if i % 2 == 1 {
                             ui.end_row();
@@ -1407,9 +1403,8 @@ fn dial_turn(centre: egui::Pos2, pointer: Option<egui::Pos2>, delta: egui::Vec2)
     -swept.to_degrees()
 }
 
-/// Every tissue's shelf entry: id, name, shelf, licence and credit line,
-/// and a 64-pixel thumbnail of its built texture or overlay (its
-/// photograph while not yet built).
+/// Every tissue, with a 64-pixel thumbnail of its built texture, layers
+/// or overlay (its photograph while not yet built).
 fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
     use crate::db::Output;
     let db = crate::db::Database::open(database)?;
@@ -1434,19 +1429,7 @@ fn thumbnails(database: &std::path::Path) -> Result<Thumbnails> {
                     small.as_raw(),
                 )
             });
-            let credit = match (&t.licence, &t.credit) {
-                (_, Some(credit)) => credit.clone(),
-                (Some(licence), None) => licence.clone(),
-                (None, None) => "see the database's sources/LICENSES.md".into(),
-            };
-            ShelfItem {
-                id: t.id.clone(),
-                name: t.name.clone(),
-                shelf: t.shelf(),
-                credit,
-                colour: t.outputs.contains(&Output::Colour),
-                thumbnail,
-            }
+            (t.clone(), thumbnail)
         })
         .collect())
 }

@@ -128,7 +128,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         DbCommand::Exemplar { id, output } => {
             let ex = exemplar(&db, db.tissue(&id)?)?;
-            organtex::atomic::write_png(&output, &organtex::db::build::rgba(&ex))?;
+            organtex::atomic::write_png(&output, &ex.to_rgba())?;
             println!("{}", output.display());
         }
     }

@@ -106,20 +106,6 @@ pub fn exemplar(db: &Database, t: &Tissue) -> Result<Exemplar> {
     Ok(lit_as_asked(t, masked_source(db, t)?))
 }
 
-/// `ex` as an RGBA image whose alpha is 255 on usable pixels and 0 on
-/// masked ones, which `Exemplar::load` reads back as the same mask.
-pub fn rgba(ex: &Exemplar) -> image::DynamicImage {
-    let raw = ex
-        .pixels
-        .iter()
-        .zip(&ex.valid)
-        .flat_map(|(p, &v)| [p[0], p[1], p[2], if v { 255 } else { 0 }])
-        .collect();
-    // One RGBA pixel per exemplar pixel, each side at most 16384.
-    let img = image::RgbaImage::from_raw(ex.width as u32, ex.height as u32, raw).expect("sized");
-    image::DynamicImage::ImageRgba8(img)
-}
-
 /// `ex` with its lighting flattened if the entry asks for it.
 fn lit_as_asked(t: &Tissue, mut ex: Exemplar) -> Exemplar {
     if t.lighting == Lighting::Flatten {
@@ -256,7 +242,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
     if t.outputs.contains(&Output::Layers) {
         // The exemplar itself: resynthesising it in 2D would tile its
         // layers away; the layered block synthesis copies from it by row.
-        write_png(&dir.join(Output::Layers.file_name()), &rgba(&ex))?;
+        write_png(&dir.join(Output::Layers.file_name()), &ex.to_rgba())?;
     }
     if t.outputs.contains(&Output::Overlay) {
         let side = ex.width.min(ex.height) as f32;

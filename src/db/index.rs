@@ -148,6 +148,14 @@ pub struct Tissue {
 }
 
 impl Tissue {
+    /// The credit line, else the licence, for showing beside the tissue.
+    pub fn credit_line(&self) -> &str {
+        self.credit
+            .as_deref()
+            .or(self.licence.as_deref())
+            .unwrap_or("see the database's sources/LICENSES.md")
+    }
+
     /// The shelf the entry is shown on: as stated, else overlay for an
     /// entry that only makes an overlay, interior for a layered exemplar
     /// without a colour texture, else surface.

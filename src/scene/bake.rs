@@ -374,18 +374,15 @@ fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior
             out.push(morphed(scene, k, interior, n, &out, progress)?);
             continue;
         }
-        let built = match interior.method {
-            InteriorMethod::Layered => &scene.tissues.layers,
-            _ => &scene.tissues.colour,
-        };
-        let colour = built.get(&interior.texture).ok_or_else(|| {
+        let built = scene.tissues.of(interior.method.output());
+        let texture = built.get(&interior.texture).ok_or_else(|| {
             Error::invalid(format!(
                 "node '{}': interior texture '{}' was not built",
                 node.name, interior.texture
             ))
         })?;
         let mut volume = interior_block(
-            colour,
+            texture,
             &interior.photographs,
             n,
             interior.method,

@@ -62,6 +62,27 @@ pub struct Tissues {
     pub layers: HashMap<String, std::path::PathBuf>,
 }
 
+impl Tissues {
+    /// The built files of one output, by tissue id.
+    pub fn of(&self, output: Output) -> &HashMap<String, std::path::PathBuf> {
+        match output {
+            Output::Colour => &self.colour,
+            Output::Height => &self.height,
+            Output::Overlay => &self.overlay,
+            Output::Layers => &self.layers,
+        }
+    }
+
+    fn of_mut(&mut self, output: Output) -> &mut HashMap<String, std::path::PathBuf> {
+        match output {
+            Output::Colour => &mut self.colour,
+            Output::Height => &mut self.height,
+            Output::Overlay => &mut self.overlay,
+            Output::Layers => &mut self.layers,
+        }
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct FacetReport {
     pub node: String,
@@ -165,13 +186,9 @@ pub fn ensure_tissues(
                 db::build(database, std::slice::from_ref(id), &CancelOnly(progress))?;
             }
         }
-        let map = match output {
-            Output::Colour => &mut tissues.colour,
-            Output::Height => &mut tissues.height,
-            Output::Overlay => &mut tissues.overlay,
-            Output::Layers => &mut tissues.layers,
-        };
-        map.insert(id.clone(), database.output_path(id, *output));
+        tissues
+            .of_mut(*output)
+            .insert(id.clone(), database.output_path(id, *output));
     }
     Ok(tissues)
 }

@@ -92,12 +92,13 @@ impl InteriorMethod {
     }
 }
 
-/// A `size`^3 block by `method`: from the colour texture at `colour`, or
-/// for stereology from `photographs` (the colour texture where none are
-/// given), or for a layered block from the layered exemplar at `colour`
-/// (scaled to `size` rows, the block's depth along y).
+/// A `size`^3 block by `method` from the tissue's built file at `texture`
+/// (`InteriorMethod::output`): its colour texture, or for stereology
+/// `photographs` (the colour texture where none are given), or for a
+/// layered block its layered exemplar (scaled to `size` rows, the block's
+/// depth along y).
 pub fn interior_block(
-    colour: &Path,
+    texture: &Path,
     photographs: &[PathBuf],
     size: usize,
     method: InteriorMethod,
@@ -111,7 +112,7 @@ pub fn interior_block(
         ));
     }
     if method == InteriorMethod::Layered {
-        let exemplar = Exemplar::load(colour, None, None)?;
+        let exemplar = Exemplar::load(texture, None, None)?;
         // As `synth3d --layered`: scaling up by more than 2 would invent
         // the layers' detail.
         if 2 * exemplar.height < size {
@@ -121,20 +122,20 @@ pub fn interior_block(
                 exemplar.height,
                 size.div_ceil(2)
             ))
-            .in_file(colour));
+            .in_file(texture));
         }
-        let exemplar = exemplar.with_height(size).map_err(|e| e.in_file(colour))?;
+        let exemplar = exemplar.with_height(size).map_err(|e| e.in_file(texture))?;
         let opts = crate::synth::block::layered::LayeredOptions {
             size,
             seed,
             ..Default::default()
         };
         return crate::synth::block::layered::synthesize_layered(&exemplar, &opts, progress)
-            .map_err(|e| e.in_file(colour));
+            .map_err(|e| e.in_file(texture));
     }
     let Some(method) = method.block() else {
         let paths = if photographs.is_empty() {
-            vec![colour.to_path_buf()]
+            vec![texture.to_path_buf()]
         } else {
             photographs.to_vec()
         };
@@ -149,7 +150,7 @@ pub fn interior_block(
             .map_err(|e| e.in_file(&paths[0]));
     };
     let side = 2 * size as u32;
-    let img = read_image(colour)?
+    let img = read_image(texture)?
         .resize_exact(side, side, image::imageops::FilterType::Triangle)
         .to_rgb8();
     let pixels = img.pixels().map(|p| p.0).collect::<Vec<_>>();

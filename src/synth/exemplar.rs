@@ -60,6 +60,21 @@ impl Exemplar {
         })
     }
 
+    /// The exemplar as an RGBA image whose alpha is 255 on usable pixels
+    /// and 0 on masked ones: what `load` reads back as the same exemplar.
+    pub fn to_rgba(&self) -> image::DynamicImage {
+        let raw = self
+            .pixels
+            .iter()
+            .zip(&self.valid)
+            .flat_map(|(p, &v)| [p[0], p[1], p[2], if v { 255 } else { 0 }])
+            .collect();
+        // One RGBA pixel per exemplar pixel: width x height of them.
+        let img =
+            image::RgbaImage::from_raw(self.width as u32, self.height as u32, raw).expect("sized");
+        image::DynamicImage::ImageRgba8(img)
+    }
+
     /// Read an exemplar: the image, its mask (a separate image, else the
     /// image's alpha channel, else everything usable), cropped. Any PNG or
     /// JPEG the image crate decodes (grey, grey and alpha, RGB, RGBA, 8 or

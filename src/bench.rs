@@ -9,11 +9,11 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::bake::{BakeOptions, bake};
 use crate::error::Result;
 use crate::mesh::curvature::Curvature;
 use crate::mesh::{Components, Topology, io};
 use crate::progress::Silent;
-use crate::scene::bake::{BakeOptions, bake};
 use crate::solid::{Placement, Plane, plane_section, sample_colours};
 use crate::synth::block::{BlockOptions, synthesize_block};
 use crate::synth::exemplar::{Crop, Exemplar};
@@ -412,10 +412,10 @@ fn lst_cut_step(_: &Path) -> Result<Step> {
     let a = lst::anchors::kiwi(lst::TextureType::LayeredTensor, 4126)?;
     let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
+    let interior = lst::LstInterior::new(model.into(), exemplar.into())?;
     let normal = glam::DVec3::new(0.3, 0.2, 1.0).normalize();
     Ok(Box::new(move || {
-        let interior = lst::LstInterior::new(&model, &exemplar)?;
-        let cut = crate::tetra::march::plane_cut(&model.mesh, normal, 0.05);
+        let cut = crate::tetra::march::plane_cut(&interior.model().mesh, normal, 0.05);
         std::hint::black_box(interior.cut_colours(&cut));
         Ok(())
     }))
@@ -434,9 +434,9 @@ fn lst_cut_uterus(root: &Path) -> Result<Step> {
     let a = lst::anchors::uterus_wall(params, &Default::default(), lst::TextureType::Layered)?;
     let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
+    let interior = lst::LstInterior::new(model.into(), exemplar.into())?;
     Ok(Box::new(move || {
-        let interior = lst::LstInterior::new(&model, &exemplar)?;
-        let cut = crate::tetra::march::plane_cut(&model.mesh, glam::DVec3::X, 0.0);
+        let cut = crate::tetra::march::plane_cut(&interior.model().mesh, glam::DVec3::X, 0.0);
         std::hint::black_box(interior.cut_colours(&cut));
         Ok(())
     }))

@@ -7,6 +7,7 @@
 #[cfg(feature = "render")]
 pub mod app;
 pub mod atomic;
+pub mod bake;
 pub mod bench;
 pub mod blend;
 pub mod db;
@@ -21,6 +22,7 @@ pub mod raster;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod rng;
+pub mod runtime;
 pub mod scene;
 pub mod solid;
 pub mod synth;

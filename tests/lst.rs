@@ -108,7 +108,7 @@ fn layered_types_take_the_depth_and_show_the_outer_layer_at_the_surface() {
             }
         }
         // The exemplar's skin (red) where the depth is 0.
-        let interior = LstInterior::new(&model, &ex).expect("interior");
+        let interior = LstInterior::new(model.clone().into(), ex.clone().into()).expect("interior");
         let outer: Vec<DVec3> = tets
             .positions
             .iter()
@@ -141,7 +141,7 @@ fn cross_sections_through_one_line_agree_on_it() {
     let a = kiwi(TextureType::LayeredTensor, 1500);
     let model = lst::fill(&a.tets, &a.options, &Silent).expect("fill");
     let ex = anchors::layered_exemplar();
-    let interior = LstInterior::new(&model, &ex).expect("interior");
+    let interior = LstInterior::new(model.into(), ex.into()).expect("interior");
     let (a, dir) = (
         DVec3::new(0.1, -0.2, 0.0),
         DVec3::new(0.3, 0.2, 1.0).normalize(),
@@ -240,7 +240,7 @@ fn bad_input_gives_clear_errors() {
         spacing: 1.0,
         voxels: vec![[0; 3]; 32 * 32],
     };
-    let e = LstInterior::new(&model, &flat)
+    let e = LstInterior::new(model.into(), flat.into())
         .err()
         .expect("flat exemplar")
         .to_string();

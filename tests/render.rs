@@ -315,8 +315,10 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
         anchors::cake(TextureType::Layered, 1500).unwrap(),
         anchors::kiwi(TextureType::Isotropic, 1500).unwrap(),
     ] {
-        let model = organtex::solid::lst::fill(&anchor.tets, &anchor.options, &Silent).unwrap();
-        let interior = LstInterior::new(&model, &exemplar).unwrap();
+        let model = std::sync::Arc::new(
+            organtex::solid::lst::fill(&anchor.tets, &anchor.options, &Silent).unwrap(),
+        );
+        let interior = LstInterior::new(model.clone(), exemplar.clone().into()).unwrap();
         let (lo, hi) = anchor.surface.bounding_box().unwrap();
         let z = 0.5 * (lo.z + hi.z) + 0.013 * (hi.z - lo.z);
         let cut = organtex::tetra::march::plane_cut(&model.mesh, DVec3::Z, z);
@@ -373,10 +375,10 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
                         .iter()
                         .any(|&(dx, dy)| {
                             locator
-                                .locate(on_plane(px as f64 + dx, py as f64 + dy))
+                                .locate(&model.mesh, on_plane(px as f64 + dx, py as f64 + dy))
                                 .is_none()
                         });
-                let Some((t, b)) = locator.locate(p).filter(|_| !rim) else {
+                let Some((t, b)) = locator.locate(&model.mesh, p).filter(|_| !rim) else {
                     continue;
                 };
                 let c = interior.colour_in(t, b);

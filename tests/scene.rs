@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
+use organtex::bake::{BakeOptions, BakeReport, Baked, bake};
 use organtex::mesh::{Components, Topology, TriMesh};
 use organtex::progress::{Progress, Silent};
-use organtex::scene::bake::{BakeOptions, BakeReport, Baked, bake};
 use organtex::scene::uterus::{self, CavityParams};
 use organtex::solid::InteriorMethod;
 use organtex::solid::section::{Plane, plane_section};
@@ -385,7 +385,7 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     // cut through the wall is coloured from it.
     let l = interior.lst.as_ref().expect("the scene asks for an LST");
     assert_eq!(
-        (l.file.as_path(), l.kind),
+        (l.file.as_path(), l.kind.as_str()),
         (std::path::Path::new("interior/uterus.lst"), "1b")
     );
     let model = organtex::solid::lst::LstModel::read(&out.path().join(&l.file)).unwrap();
@@ -396,7 +396,7 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     let regions: Vec<(&str, &str)> = l
         .regions
         .iter()
-        .map(|r| (r.facet.as_str(), r.kind))
+        .map(|r| (r.facet.as_str(), r.kind.as_str()))
         .collect();
     assert_eq!(regions, [("myoma-front", "1a"), ("myoma-back", "1a")]);
     assert!(
@@ -415,8 +415,8 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
         })
         .count();
     assert_eq!(fibrous, l.regions.iter().map(|r| r.tets).sum::<usize>());
-    let lapped = organtex::solid::lst::LstInterior::new(&model, &block).unwrap();
     let cut = organtex::tetra::march::plane_cut(&model.mesh, glam::DVec3::X, 0.0);
+    let lapped = organtex::solid::lst::LstInterior::new(model.into(), block.into()).unwrap();
     assert!(cut.triangles.len() > 1000, "{}", cut.triangles.len());
     assert_eq!(lapped.cut_colours(&cut).len(), cut.positions.len());
     let facets: Vec<&str> = r.facets.iter().map(|f| f.facet.facet.as_str()).collect();

@@ -411,13 +411,13 @@ fn bake(
     atlas: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let opts = organtex::scene::bake::BakeOptions {
+    let opts = organtex::bake::BakeOptions {
         atlas,
         ..Default::default()
     };
     let callback = Callback::new(progress);
     let baked = py
-        .detach(|| organtex::scene::bake::bake(&scene, &out_dir, &opts, &callback))
+        .detach(|| organtex::bake::bake(&scene, &out_dir, &opts, &callback))
         .map_err(error)?;
     Ok(serde_json::to_string(&baked.report).expect("the report serialises"))
 }

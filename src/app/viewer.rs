@@ -668,7 +668,7 @@ impl Viewer {
                         )
                         .map_err(|e| Error::invalid(format!("node '{name}': tet mesh: {e}")))?;
                         // The bake's seed, so the cut shows what it bakes.
-                        let (model, _, _) = crate::scene::bake::lap(
+                        let (model, _, _) = crate::bake::lap(
                             spec,
                             surface,
                             &tets,
@@ -909,7 +909,7 @@ impl Viewer {
             return self.error(e);
         }
         self.jobs.bake = Some(Job::spawn("baking", self.wake(), move |p| {
-            crate::scene::bake::bake(&scene, &dir, &Default::default(), p).map(|_| dir)
+            crate::bake::bake(&scene, &dir, &Default::default(), p).map(|_| dir)
         }));
     }
 

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use organtex::Result;
-use organtex::scene::bake::{BakeOptions, Baked, bake};
+use organtex::bake::{BakeOptions, Baked, bake};
 
 use super::progress::Bars;
 

@@ -152,7 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     let fill_seconds = start.elapsed().as_secs_f64();
     bars.finish();
     // The exemplar must suit the model before anything is written.
-    LstInterior::new(&model, &exemplar).map_err(|e| e.in_file(&args.exemplar))?;
+    LstInterior::check_exemplar(&exemplar).map_err(|e| e.in_file(&args.exemplar))?;
     model.write(&args.output)?;
     let f = Figures {
         file: args.mesh.clone(),

@@ -119,8 +119,8 @@ pub fn run(args: Args) -> Result<()> {
             };
             match args.lst.as_deref().map(LstModel::read).transpose()? {
                 Some(model) => {
-                    let interior =
-                        LstInterior::new(&model, &volume).map_err(|e| e.in_file(block))?;
+                    let interior = LstInterior::new(model.into(), volume.into())
+                        .map_err(|e| e.in_file(block))?;
                     render_section(&section, &interior, pixels_per_unit)?
                 }
                 None => {

@@ -2,12 +2,12 @@
 //! assets a simulator loads.
 
 pub mod atlas;
-pub mod bake;
 pub mod build;
 pub mod composite;
 pub mod contrast;
 pub mod draw;
 pub mod file;
 pub mod gltf;
+pub mod interior;
 pub mod manifest;
 pub mod uterus;

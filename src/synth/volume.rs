@@ -41,7 +41,9 @@ impl Volume {
             let n = self.size[a] as f64;
             let u = (p[a] - 0.5).rem_euclid(n);
             let i = u.floor();
-            lo[a] = (i as usize).min(self.size[a] - 1);
+            // A hair below 0 wraps to exactly n in floating point: that is
+            // voxel 0 again, not voxel n - 1.
+            lo[a] = if i >= n { 0 } else { i as usize };
             hi[a] = (lo[a] + 1) % self.size[a];
             t[a] = (u - i) as f32;
         }

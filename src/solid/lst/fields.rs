@@ -250,6 +250,7 @@ pub fn vertex_neighbours(mesh: &TetMesh) -> Vec<Vec<u32>> {
 pub fn stroke_constraints(
     strokes: &[Vec<DVec3>],
     spacing: f64,
+    mesh: &TetMesh,
     locator: &Locator,
 ) -> Result<Vec<Constraint>> {
     let mut out = Vec::new();
@@ -269,7 +270,7 @@ pub fn stroke_constraints(
             let steps = ((len / spacing).ceil() as usize).max(1);
             for i in 0..steps {
                 let p = seg[0] + d * ((i as f64 + 0.5) / steps as f64);
-                let (t, bary) = locator.locate(p).ok_or_else(|| {
+                let (t, bary) = locator.locate(mesh, p).ok_or_else(|| {
                     Error::invalid(format!(
                         "stroke {s}, segment {k}: the point {p} lies outside the mesh"
                     ))

@@ -10,8 +10,11 @@ use crate::tetra::TetMesh;
 /// Barycentric coordinates down to this count as inside (points on a face).
 const INSIDE_EPS: f64 = 1e-9;
 
-pub struct Locator<'a> {
-    mesh: &'a TetMesh,
+/// Built over one mesh, and given that mesh at every query (it holds no
+/// reference, so a model can own both).
+pub struct Locator {
+    /// The mesh's tet count, to catch a query with another mesh.
+    tets_of_mesh: usize,
     lo: DVec3,
     cell: f64,
     dims: [usize; 3],
@@ -23,9 +26,9 @@ pub struct Locator<'a> {
     adjacency: std::sync::OnceLock<Vec<[u32; 4]>>,
 }
 
-impl<'a> Locator<'a> {
+impl Locator {
     /// About two tets per cell along each axis.
-    pub fn new(mesh: &'a TetMesh) -> Locator<'a> {
+    pub fn new(mesh: &TetMesh) -> Locator {
         let (lo, hi) = mesh
             .positions
             .iter()
@@ -80,7 +83,7 @@ impl<'a> Locator<'a> {
             });
         }
         Locator {
-            mesh,
+            tets_of_mesh: mesh.num_tets(),
             lo,
             cell,
             dims,
@@ -88,6 +91,11 @@ impl<'a> Locator<'a> {
             tets,
             adjacency: std::sync::OnceLock::new(),
         }
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        4 * (self.start.len() + self.tets.len()) + self.adjacency.get().map_or(0, |a| 16 * a.len())
     }
 
     fn cell_of(&self, p: DVec3) -> Option<[usize; 3]> {
@@ -104,10 +112,11 @@ impl<'a> Locator<'a> {
     }
 
     /// The tet holding `p` and `p`'s barycentric coordinates in it.
-    pub fn locate(&self, p: DVec3) -> Option<(usize, [f64; 4])> {
+    pub fn locate(&self, mesh: &TetMesh, p: DVec3) -> Option<(usize, [f64; 4])> {
+        debug_assert_eq!(mesh.num_tets(), self.tets_of_mesh, "the locator's own mesh");
         let c = self.cell_of(p)?;
         self.in_cell(c).iter().find_map(|&t| {
-            let b = barycentric(&self.mesh.corners(t as usize), p);
+            let b = barycentric(&mesh.corners(t as usize), p);
             b.iter()
                 .all(|&x| x >= -INSIDE_EPS)
                 .then_some((t as usize, b))
@@ -120,8 +129,8 @@ impl<'a> Locator<'a> {
     /// surface can fall just outside the tet boundary, which lies within
     /// about a cell of it, and the colour there is then the boundary's,
     /// continuous along the section's edge.
-    pub fn locate_or_nearest(&self, p: DVec3) -> (usize, [f64; 4]) {
-        if let Some(hit) = self.locate(p) {
+    pub fn locate_or_nearest(&self, mesh: &TetMesh, p: DVec3) -> (usize, [f64; 4]) {
+        if let Some(hit) = self.locate(mesh, p) {
             return hit;
         }
         let q = (p - self.lo) / self.cell;
@@ -134,7 +143,7 @@ impl<'a> Locator<'a> {
                 for y in lo[1]..=hi[1] {
                     for x in lo[0]..=hi[0] {
                         for &t in self.in_cell([x, y, z]) {
-                            let c = self.mesh.corners(t as usize);
+                            let c = mesh.corners(t as usize);
                             let d = ((c[0] + c[1] + c[2] + c[3]) / 4.0).distance_squared(p);
                             if nearest
                                 .is_none_or(|(bd, bt)| d < bd || (d == bd && (t as usize) < bt))
@@ -154,7 +163,7 @@ impl<'a> Locator<'a> {
         };
         let adjacency = self
             .adjacency
-            .get_or_init(|| self.mesh.face_adjacency().unwrap_or_default());
+            .get_or_init(|| mesh.face_adjacency().unwrap_or_default());
         let mut around = vec![first];
         for _ in 0..2 {
             let ring: Vec<usize> = around
@@ -174,14 +183,14 @@ impl<'a> Locator<'a> {
         }
         let (t, at) = around
             .iter()
-            .map(|&t| (t, closest_in_tet(&self.mesh.corners(t), p)))
+            .map(|&t| (t, closest_in_tet(&mesh.corners(t), p)))
             .min_by(|a, b| {
                 a.1.distance_squared(p)
                     .total_cmp(&b.1.distance_squared(p))
                     .then(a.0.cmp(&b.0))
             })
             .expect("one tet at least");
-        let b = barycentric(&self.mesh.corners(t), at).map(|x| x.max(0.0));
+        let b = barycentric(&mesh.corners(t), at).map(|x| x.max(0.0));
         let sum: f64 = b.iter().sum();
         (
             t,

@@ -151,6 +151,29 @@ impl Splotch {
     }
 }
 
+/// For a depth band's mask over depths `s_lo..=s_hi`: whether its depth
+/// factor is 1 over all of them, and whether it is 0 over all of them
+/// (`Splotch::alpha`'s depth term; conservative by a hair, for callers
+/// that interpolate the depth themselves).
+pub fn band_bounds(band: MaskKind, s_lo: f64, s_hi: f64) -> (bool, bool) {
+    const HAIR: f64 = 1e-9;
+    match band {
+        MaskKind::Outer => (
+            s_hi <= BAND_OUTER - HAIR,
+            s_lo >= BAND_OUTER + FALLOFF + HAIR,
+        ),
+        MaskKind::Inner => (
+            s_lo >= BAND_INNER + HAIR,
+            s_hi <= BAND_INNER - FALLOFF - HAIR,
+        ),
+        MaskKind::Middle => (
+            s_lo >= BAND_MIDDLE.0 + HAIR && s_hi <= BAND_MIDDLE.1 - HAIR,
+            s_lo >= BAND_MIDDLE.1 + FALLOFF + HAIR || s_hi <= BAND_MIDDLE.0 - FALLOFF - HAIR,
+        ),
+        MaskKind::Splotch => (true, false),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

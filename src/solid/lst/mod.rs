@@ -125,7 +125,7 @@ pub struct LstOptions {
 }
 
 /// What a fill measured besides the model.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FillStats {
     pub patches: u32,
     pub layers: usize,
@@ -391,7 +391,7 @@ fn fill_part(
         let neighbours = fields::vertex_neighbours(mesh);
         let spacing = mean_edge(mesh);
         let locator = locate::Locator::new(mesh);
-        let constraints = fields::stroke_constraints(&opts.strokes, spacing, &locator)?;
+        let constraints = fields::stroke_constraints(&opts.strokes, spacing, mesh, &locator)?;
         let sigma = match &depth {
             Some(d) => {
                 let mut diffs: Vec<f64> = neighbours

@@ -204,8 +204,8 @@ impl LstModel {
         let mut patches = 0;
         for i in 0..nl {
             let patch = r.u32()?;
-            let mask =
-                MaskKind::from_u8(r.u8()?).ok_or(format!("layer {i} has an unknown mask"))?;
+            let mask = MaskKind::from_u8(r.u8()?)
+                .ok_or_else(|| format!("layer {i} has an unknown mask"))?;
             let mut coords = [[0f32; 3]; 4];
             for c in coords.iter_mut().flatten() {
                 *c = r.f32()?;

@@ -122,7 +122,7 @@ pub fn whorl(ball: &Ball, region: &TetMesh) -> Vec<Vec<DVec3>> {
     let spacing = super::mean_edge(region);
     let u = ball.axis.any_orthonormal_vector();
     let v = ball.axis.cross(u);
-    let inside = |p: DVec3| locator.locate(p).is_some();
+    let inside = |p: DVec3| locator.locate(region, p).is_some();
     let mut strokes = Vec::new();
     for h in [-0.5, 0.0, 0.5] {
         for rho in [0.3, 0.55, 0.8] {

@@ -223,6 +223,23 @@ impl Morph {
 }
 
 impl Morph {
+    /// Bytes held by its images, bands and warps (the BSP and sweeps are
+    /// small beside them).
+    pub fn bytes(&self) -> usize {
+        let images: usize = self
+            .exemplars
+            .iter()
+            .map(|e| 12 * e.rgb.len() + e.mask.as_ref().map_or(0, Vec::len))
+            .sum();
+        let bands: usize = self
+            .bands
+            .iter()
+            .map(|b| 12 * (b.low.len() + b.detail.len()))
+            .sum();
+        let warps: usize = self.warps.iter().flatten().flatten().map(Warp::bytes).sum();
+        images + bands + warps
+    }
+
     /// The morph sampled into a `voxels`-a-side block over the cube of
     /// side the box's longest extent from `lo`, with its placement: for
     /// consumers that need a 3D texture (a GPU cut, an NRRD for other

@@ -149,6 +149,13 @@ pub struct Warp {
 }
 
 impl Warp {
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        16 * self.target.len()
+    }
+}
+
+impl Warp {
     /// The image of `q` (clamped to the grid).
     #[inline]
     pub fn at(&self, q: DVec2) -> DVec2 {

@@ -1,0 +1,355 @@
+//! A bake's interiors: every node's block (synthesised from its tissue,
+//! layered, from stereology, or a morph sampled), its tet mesh and its
+//! lapped solid texture, and the files they go to under DIR/interior/,
+//! as report.json's `interiors` lines name them (`scene::interior`).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::scene::build::BakedScene;
+use crate::scene::interior::{InteriorLine, LstLine, LstRegionLine, MorphLine, TetLine};
+use crate::solid::{InteriorMethod, interior_block};
+use crate::synth::volume::Volume;
+
+/// Every node's interior block, synthesised from its tissue's colour
+/// texture (seed 004, 3.3) or layered exemplar (seed 002, 4.2),
+/// `[bake] interior_voxels` a side.
+pub(super) fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior>> {
+    let n = scene.spec.bake.interior_voxels;
+    let mut out = Vec::new();
+    for (k, node) in scene.spec.nodes.iter().enumerate() {
+        let Some(interior) = &node.interior else {
+            continue;
+        };
+        if interior.method == InteriorMethod::Morph {
+            out.push(morphed(scene, k, interior, n, &out, progress)?);
+            continue;
+        }
+        let built = scene.tissues.of(interior.method.output());
+        let texture = built.get(&interior.texture).ok_or_else(|| {
+            Error::invalid(format!(
+                "node '{}': interior texture '{}' was not built",
+                node.name, interior.texture
+            ))
+        })?;
+        let mut volume = interior_block(
+            texture,
+            &interior.photographs,
+            n,
+            interior.method,
+            k as u64,
+            progress,
+        )
+        .map_err(|e| match e {
+            // Ctrl-C is not the node's fault.
+            Error::Cancelled => e,
+            e => Error::invalid(format!("node '{}': interior: {e}", node.name)),
+        })?;
+        volume.spacing = interior.block_size / n as f64;
+        // Names distinct as nodes may meet as file names ("a b", "a_b").
+        let file = interior_file(&node.name, k, &out);
+        let tets = if interior.tet_mesh || interior.lst.is_some() {
+            Some(tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)?)
+        } else {
+            None
+        };
+        let lst = match (&interior.lst, &tets) {
+            (Some(spec), Some((_, tet_mesh))) => Some(lapped(
+                spec,
+                &scene.nodes[k].mesh,
+                tet_mesh,
+                interior.block_size,
+                &file,
+                k as u64,
+                &node.name,
+                progress,
+            )?),
+            _ => None,
+        };
+        out.push(Interior {
+            line: InteriorLine {
+                node: node.name.clone(),
+                texture: interior.texture.clone(),
+                method: interior.method,
+                file,
+                voxels: n,
+                voxel_size: volume.spacing,
+                tet_mesh: tets
+                    .as_ref()
+                    .filter(|_| interior.tet_mesh)
+                    .map(|(line, _)| line.clone()),
+                lst: lst.as_ref().map(|(line, _)| line.clone()),
+                morph: None,
+            },
+            volume,
+            tets: tets.map(|(_, m)| m),
+            lst: lst.map(|(_, m)| m),
+            sections: None,
+            surface: None,
+        });
+    }
+    Ok(out)
+}
+
+/// interior/NODE.nrrd, the name made distinct from those already taken
+/// (nodes "a b" and "a_b" meet as file names).
+fn interior_file(node: &str, k: usize, taken: &[Interior]) -> PathBuf {
+    let mut stem = file_name(node);
+    if taken
+        .iter()
+        .any(|i| i.line.file.file_stem() == Some(std::ffi::OsStr::new(&stem)))
+    {
+        stem = format!("{stem}-{k}");
+    }
+    PathBuf::from("interior").join(format!("{stem}.nrrd"))
+}
+
+/// Node `k`'s interior morphed from its sections (seed 003): precomputed,
+/// sampled into an `n`-voxel block over its bounding cube.
+fn morphed(
+    scene: &BakedScene,
+    k: usize,
+    interior: &crate::scene::file::Interior,
+    n: usize,
+    taken: &[Interior],
+    progress: &dyn Progress,
+) -> Result<Interior> {
+    use crate::solid::morph::{Morph, MorphOptions};
+    let name = &scene.spec.nodes[k].name;
+    let err = |e: Error| match e {
+        Error::Cancelled => e,
+        e => Error::invalid(format!("node '{name}': interior: {e}")),
+    };
+    // Checked when the scene loaded: a morph names its sections file.
+    let sections = interior.sections.clone().expect("a morph has sections");
+    let mesh = &scene.nodes[k].mesh;
+    let topology = crate::mesh::Topology::build(mesh).map_err(err)?;
+    let t = Instant::now();
+    let morph = Morph::read(
+        mesh,
+        &topology,
+        &sections,
+        MorphOptions::default(),
+        progress,
+    )
+    .map_err(err)?;
+    let precompute_s = t.elapsed().as_secs_f64();
+    let (lo, hi) = mesh
+        .bounding_box()
+        .ok_or_else(|| err(Error::invalid("the mesh has no vertices")))?;
+    let (volume, placement) = morph.block(lo, hi, n).map_err(err)?;
+    let file = interior_file(name, k, taken);
+    let copied = file.with_file_name(format!(
+        "{}-sections",
+        file.file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into())
+    ));
+    Ok(Interior {
+        line: InteriorLine {
+            node: name.clone(),
+            texture: interior.texture.clone(),
+            method: interior.method,
+            file,
+            voxels: n,
+            voxel_size: placement.scale,
+            tet_mesh: None,
+            lst: None,
+            morph: Some(MorphLine {
+                sections: copied.join("sections.toml"),
+                surface: Some(copied.join("surface.obj")),
+                exemplars: morph.exemplars().len(),
+                regions: morph.regions(),
+                block_origin: lo.to_array(),
+                precompute_s,
+            }),
+        },
+        volume,
+        tets: None,
+        lst: None,
+        sections: Some(sections),
+        surface: Some(mesh.clone()),
+    })
+}
+
+/// The node's inside as tetrahedra at the default resolution, and its
+/// report line (the file beside the block, as .vtk).
+fn tet_mesh(
+    mesh: &crate::mesh::TriMesh,
+    block_file: &Path,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(TetLine, crate::tetra::TetMesh)> {
+    let (tets, report) =
+        crate::tetra::tetrahedralise_report(mesh, &crate::tetra::TetOptions::default(), progress)
+            .map_err(|e| Error::invalid(format!("node '{node}': tet mesh: {e}")))?;
+    let quality = tets.quality();
+    let line = TetLine {
+        file: block_file.with_extension("vtk"),
+        vertices: tets.num_vertices(),
+        tets: tets.num_tets(),
+        min_dihedral: quality.min_dihedral,
+        max_dihedral: quality.max_dihedral,
+        hausdorff_relative: report.hausdorff.map(|h| h.relative()),
+    };
+    Ok((line, tets))
+}
+
+/// The node's lapped solid texture (`[node.interior.lst]`) and its
+/// report line.
+#[allow(clippy::too_many_arguments)]
+fn lapped(
+    spec: &crate::scene::file::LstSpec,
+    surface: &crate::mesh::TriMesh,
+    tets: &crate::tetra::TetMesh,
+    block_size: f64,
+    block_file: &Path,
+    seed: u64,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(LstLine, crate::solid::lst::LstModel)> {
+    let start = std::time::Instant::now();
+    let (model, stats, regions) = lap(spec, surface, tets, block_size, seed, node, progress)?;
+    let line = LstLine {
+        file: block_file.with_extension("lst"),
+        kind: model.kind.name().into(),
+        tets: tets.num_tets(),
+        bytes: model.file_size(),
+        stats,
+        regions,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok((line, model))
+}
+
+/// Lap a node's block through its tets as `[node.interior.lst]` asks
+/// (the bake's and the viewer's cut plane's): the model, the stats of
+/// the tets outside every region, and each region's line. Errors name
+/// the node.
+pub fn lap(
+    spec: &crate::scene::file::LstSpec,
+    surface: &crate::mesh::TriMesh,
+    tets: &crate::tetra::TetMesh,
+    block_size: f64,
+    seed: u64,
+    node: &str,
+    progress: &dyn Progress,
+) -> Result<(
+    crate::solid::lst::LstModel,
+    crate::solid::lst::FillStats,
+    Vec<LstRegionLine>,
+)> {
+    use crate::solid::lst;
+    let err = |e: Error| Error::invalid(format!("node '{node}': [node.interior.lst]: {e}"));
+    let kind = lst::TextureType::parse(&spec.kind).map_err(err)?;
+    let (depth_outer, depth_inner) = match (&spec.depth_outer, &spec.depth_inner) {
+        (Some(o), Some(i)) => lst::facet_depth_points(surface, o, i).map_err(err)?,
+        (None, None) if !kind.needs_depth() => (Vec::new(), Vec::new()),
+        _ => {
+            return Err(err(Error::invalid(format!(
+                "type {} needs depth_outer and depth_inner (two facets)",
+                kind.name()
+            ))));
+        }
+    };
+    let scale = spec.scale.unwrap_or(block_size);
+    let opts = lst::LstOptions {
+        kind,
+        scale,
+        strokes: spec
+            .strokes
+            .iter()
+            .map(|s| s.iter().map(|&p| glam::DVec3::from_array(p)).collect())
+            .collect(),
+        depth_outer,
+        depth_inner,
+        seed,
+    };
+    let wanted = spec
+        .regions
+        .iter()
+        .map(|r| {
+            Ok(lst::regions::FacetRegion {
+                facet: r.facet.clone(),
+                kind: lst::TextureType::parse(&r.kind)?,
+                scale: r.scale.unwrap_or(scale),
+                strokes: r
+                    .strokes
+                    .iter()
+                    .map(|s| s.iter().map(|&p| glam::DVec3::from_array(p)).collect())
+                    .collect(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()
+        .map_err(err)?;
+    let regions = lst::regions::facet_regions(surface, tets, &wanted, seed).map_err(err)?;
+    let (model, mut stats) = lst::fill_regions(tets, &opts, &regions, progress).map_err(err)?;
+    let main = stats.remove(0);
+    let lines = regions
+        .iter()
+        .zip(stats)
+        .map(|(r, stats)| LstRegionLine {
+            facet: r.name.clone(),
+            kind: r.options.kind.name().into(),
+            tets: r.tets.len(),
+            stats,
+        })
+        .collect();
+    Ok((model, main, lines))
+}
+
+/// A node's interior as baked: its report line, block, tet mesh and
+/// lapped solid texture.
+pub(super) struct Interior {
+    pub line: InteriorLine,
+    volume: Volume,
+    tets: Option<crate::tetra::TetMesh>,
+    lst: Option<crate::solid::lst::LstModel>,
+    /// A morph's sections file, copied beside the block.
+    sections: Option<PathBuf>,
+    /// A morph's domain, written beside its sections.
+    surface: Option<crate::mesh::TriMesh>,
+}
+
+/// A node name as a file name: letters, digits, '-' and '_' kept, the rest
+/// '_'.
+fn file_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Write every interior's files under `out` (each atomically).
+pub(super) fn write(interiors: &[Interior], out: &Path) -> Result<()> {
+    for interior in interiors {
+        let path = out.join(&interior.line.file);
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        // A layered block's y axis is depth: the header says so, for the
+        // LST reader and other tools.
+        let depth_axis = (interior.line.method == InteriorMethod::Layered).then_some(1);
+        interior.volume.write_nrrd_with_depth(&path, depth_axis)?;
+        if let (Some(line), Some(tets)) = (&interior.line.tet_mesh, &interior.tets) {
+            crate::tetra::io::write_vtk(&out.join(&line.file), tets)?;
+        }
+        if let (Some(line), Some(model)) = (&interior.line.lst, &interior.lst) {
+            model.write(&out.join(&line.file))?;
+        }
+        if let (Some(line), Some(sections)) = (&interior.line.morph, &interior.sections) {
+            let dir = out.join(&line.sections);
+            crate::solid::morph::copy_sections(sections, dir.parent().unwrap_or(out))?;
+            if let (Some(path), Some(mesh)) = (&line.surface, &interior.surface) {
+                crate::mesh::io::write_obj(&out.join(path), mesh, None)?;
+            }
+        }
+    }
+    Ok(())
+}

@@ -28,10 +28,18 @@ fn block_coordinates(p: vec3<f32>) -> vec3<f32> {
     return (p - placement.origin) / placement.scale;
 }
 
+// The block's colour at 3D texture coordinates in voxel units (what
+// organtex's runtime gives per vertex, interpolated). Normalised
+// coordinates put voxel i's centre at (i + 0.5) / size, as Volume::sample
+// does in voxel units.
+fn block_colour_at(coords: vec3<f32>) -> vec3<f32> {
+    let size = vec3<f32>(textureDimensions(block));
+    return textureSampleLevel(block, block_sampler, coords / size, 0.0).rgb;
+}
+
 // The block's colour at an object-space point. Normalised coordinates put
 // voxel i's centre at (i + 0.5) / size, as Volume::sample does in voxel
 // units. An explicit level so it also runs outside fragment shaders.
 fn block_colour(p: vec3<f32>) -> vec3<f32> {
-    let size = vec3<f32>(textureDimensions(block));
-    return textureSampleLevel(block, block_sampler, block_coordinates(p) / size, 0.0).rgb;
+    return block_colour_at(block_coordinates(p));
 }

@@ -1,6 +1,7 @@
 """organtex from Python: read meshes, unwrap them, synthesise tileable
 textures and solid blocks, cut sections, morph interiors from photographed
-cuts, bake scenes. Arrays are numpy
+cuts, bake scenes, and carve a bake's tet meshes as a simulator does
+(:class:`Bake`, :class:`Carving`). Arrays are numpy
 arrays in and out; every call releases the GIL while it works, takes an
 optional ``progress(stage, done, total)`` callable, stops on Ctrl-C, and
 raises :class:`OrgantexError` with the library's message (which names the
@@ -22,7 +23,7 @@ from . import _core
 from ._core import OrgantexError
 
 __all__ = ["Mesh", "Morph", "OrgantexError", "read_mesh", "unwrap", "synth", "synth3d", "section",
-           "tetra", "bake", "check_scene", "manifest"]
+           "tetra", "bake", "check_scene", "manifest", "Bake", "Node", "Carving", "Step"]
 
 Progress = Optional[Callable[[str, int, int], None]]
 Path_ = Union[str, "PathLike[str]"]
@@ -185,3 +186,131 @@ def manifest(path: Path_) -> list:
     """The scene paths a manifest lists (one per line, relative to it;
     blank and # lines skipped), as ``organtex bake --manifest`` reads it."""
     return [str(p) for p in _core.manifest(str(path))]
+
+
+# The simulator's runtime: a bake's nodes, their colours, and carving.
+
+@dataclass
+class Step:
+    """What one carving step changed. ``removed`` (k,) uint32 tet ids;
+    the faces that appeared: ``ids`` (n,) uint32 (``4 * tet + k``),
+    ``vertices`` (n, 3) uint32 tet mesh vertex ids (counter-clockwise seen
+    from outside), ``pages`` (n,) uint32 atlas pages, ``uvs`` (n, 3, 2)
+    float32 (0..1, v down), ``colours`` (n, 3, 3) uint8 (each corner's
+    interior colour); the faces that vanished: ``vanished_ids`` (m,),
+    ``vanished_vertices`` (m, 3); ``dirty`` (d, 5) uint32 rectangles
+    (page, x, y, width, height) to upload; ``released`` pages no face uses
+    any more; ``texels_pending`` when a background job still fills this
+    step's texels (:meth:`Carving.wait`); ``seconds`` the step took."""
+
+    removed: np.ndarray
+    ids: np.ndarray
+    vertices: np.ndarray
+    pages: np.ndarray
+    uvs: np.ndarray
+    colours: np.ndarray
+    vanished_ids: np.ndarray
+    vanished_vertices: np.ndarray
+    dirty: np.ndarray
+    released: np.ndarray
+    texels_pending: bool
+    seconds: float
+
+
+def _step(raw) -> Step:
+    (removed, ids, vertices, pages, uvs, colours, gone, gone_vertices, dirty, released, pending,
+     seconds) = raw
+    return Step(np.frombuffer(removed, "<u4"), np.frombuffer(ids, "<u4"),
+                np.frombuffer(vertices, "<u4").reshape(-1, 3), np.frombuffer(pages, "<u4"),
+                np.frombuffer(uvs, "<f4").reshape(-1, 3, 2),
+                np.frombuffer(colours, np.uint8).reshape(-1, 3, 3), np.frombuffer(gone, "<u4"),
+                np.frombuffer(gone_vertices, "<u4").reshape(-1, 3),
+                np.frombuffer(dirty, "<u4").reshape(-1, 5), np.frombuffer(released, "<u4"),
+                bool(pending), float(seconds))
+
+
+class Node:
+    """A node of a bake (see :class:`Bake`): its interior and tet mesh."""
+
+    def __init__(self, core):
+        self._core = core
+
+    @property
+    def name(self) -> str:
+        return self._core.name
+
+    def tet_mesh(self) -> Tuple[np.ndarray, np.ndarray]:
+        """``(positions (n, 3) float64, tets (m, 4) uint32)``, the ids of
+        the bake's .vtk, as a simulator's physics loads it."""
+        p, t = self._core.tet_mesh()
+        return np.frombuffer(p, "<f8").reshape(-1, 3), np.frombuffer(t, "<u4").reshape(-1, 4)
+
+    def colours(self, points) -> np.ndarray:
+        """The interior's (n, 3) uint8 colours at (n, 3) points."""
+        return np.frombuffer(self._core.colours(_f64(points, 3, "points")), np.uint8).reshape(-1, 3)
+
+
+class Bake:
+    """A bake folder opened for a simulator (``organtex bake SCENE -o DIR``
+    wrote it): ``nodes`` lists the nodes with an interior, ``node(name)``
+    opens one."""
+
+    def __init__(self, path: Path_):
+        self._core = _core.Bake(str(path))
+
+    @property
+    def nodes(self) -> list:
+        return list(self._core.nodes)
+
+    def node(self, name: str) -> Node:
+        return Node(self._core.node(name))
+
+
+class Carving:
+    """A carving session over a node's tet mesh, as a simulator cuts:
+    remove tets by id (SOFA's TetrahedraRemoved) or under a tool, and get
+    each :class:`Step`'s new faces textured from the interior (an atlas
+    grown page by page at ``texels_per_unit``) and the faces that vanished.
+    A tool also removes tets that would leave an edge with more than two
+    faces, so the surface stays closed."""
+
+    def __init__(self, node: Node, texels_per_unit: float = 8.0, page_size: int = 1024,
+                 background_texels: bool = False):
+        self._core = _core.Carving(node._core, texels_per_unit, page_size, background_texels)
+
+    def remove(self, tets) -> Step:
+        """Remove exactly the tets ``tets`` (ids)."""
+        ids = np.asarray(tets)
+        if ids.ndim != 1 or (ids.size and (ids.min() < 0 or ids.max() > 0xFFFFFFFF)):
+            raise OrgantexError(f"tet ids must be a 1-d array of non-negative ids, not {ids.shape}")
+        return _step(self._core.remove(np.ascontiguousarray(ids, dtype="<u4").tobytes()))
+
+    def sphere(self, centre: Sequence[float], radius: float) -> Step:
+        """Remove the tets whose centroid lies within ``radius`` of ``centre``."""
+        return _step(self._core.sphere([float(x) for x in centre], float(radius)))
+
+    def capsule(self, a: Sequence[float], b: Sequence[float], radius: float) -> Step:
+        """Remove the tets under a sphere swept from ``a`` to ``b``."""
+        return _step(self._core.capsule([float(x) for x in a], [float(x) for x in b], float(radius)))
+
+    def wait(self) -> np.ndarray:
+        """Finish background texels: the (d, 5) rectangles written."""
+        return np.frombuffer(self._core.wait(), "<u4").reshape(-1, 5)
+
+    def page(self, page: int) -> np.ndarray:
+        """Atlas page ``page`` as a (side, side, 4) uint8 RGBA array."""
+        rgba, side = self._core.page(page)
+        return np.frombuffer(rgba, np.uint8).reshape(side, side, 4)
+
+    @property
+    def pages(self) -> list:
+        return list(self._core.pages())
+
+    def surface(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The carved surface now: ``(ids (n,), vertices (n, 3))``."""
+        ids, v = self._core.surface()
+        return np.frombuffer(ids, "<u4"), np.frombuffer(v, "<u4").reshape(-1, 3)
+
+    def write_glb(self, path: Path_) -> None:
+        """The carved surface with its atlas as a .glb."""
+        self._core.write_glb(str(path))

@@ -6,6 +6,8 @@
 //! `progress(stage, done, total)`, stops on Ctrl-C, and raises
 //! `OrgantexError` with the library's message.
 
+mod runtime;
+
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -120,6 +122,12 @@ impl LittleEndian for f64 {
 }
 
 impl LittleEndian for u32 {
+    fn push(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl LittleEndian for f32 {
     fn push(self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.to_le_bytes());
     }
@@ -485,6 +493,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(synth3d, m)?)?;
     m.add_function(wrap_pyfunction!(section, m)?)?;
     m.add_class::<PyMorph>()?;
+    m.add_class::<runtime::PyBake>()?;
+    m.add_class::<runtime::PyNode>()?;
+    m.add_class::<runtime::PyCarving>()?;
     m.add_function(wrap_pyfunction!(bake, m)?)?;
     m.add_function(wrap_pyfunction!(tetra, m)?)?;
     m.add_function(wrap_pyfunction!(check_scene, m)?)?;

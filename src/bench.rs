@@ -26,6 +26,9 @@ pub type Step = Box<dyn FnMut() -> Result<()>>;
 
 pub struct Workload {
     pub name: &'static str,
+    /// Runs at least this many times, whatever `--runs` asks (a carving
+    /// tunnel's steps are its runs).
+    pub min_runs: usize,
     /// What the step does, for the table's reader.
     pub what: &'static str,
     /// Load the inputs from the project folder (untimed) and return the
@@ -58,6 +61,7 @@ pub fn workloads() -> Vec<Workload> {
     vec![
         Workload {
             name: "load bunny",
+            min_runs: 1,
             what: "read bunny.obj (56k faces)",
             prepare: |root| {
                 let path = bunny(root);
@@ -66,6 +70,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "topology bunny",
+            min_runs: 1,
             what: "half-edges, boundary loops, components, genus",
             prepare: |root| {
                 let mesh = io::read(&bunny(root))?;
@@ -78,6 +83,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "curvature bunny",
+            min_runs: 1,
             what: "angle defect, mixed area, mean curvature, dihedral angles",
             prepare: |root| {
                 let mesh = io::read(&bunny(root))?;
@@ -90,6 +96,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "load+topology+curvature bunny",
+            min_runs: 1,
             what: "the three above end to end (target < 0.3 s)",
             prepare: |root| {
                 let path = bunny(root);
@@ -104,6 +111,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "unwrap bunny",
+            min_runs: 1,
             what: "visibility, seams, ABF++ and layout, one chart (target: 1/4 of xatlas)",
             prepare: |root| {
                 let mesh = io::read(&bunny(root))?;
@@ -114,6 +122,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "tetra bunny",
+            min_runs: 1,
             what: "isosurface stuffing at about TetGen's 174,388 tets (target: 1/4 of TetGen's 5.7 s)",
             prepare: |root| {
                 let mesh = io::read(&bunny(root))?;
@@ -129,6 +138,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "synth3d layered 64",
+            min_runs: 1,
             what: "layered (depth-varying) 64^3 block from database/sources/layered_wall.png, seed 002 4.2 with the sweep fix (target <= 10 s)",
             prepare: |root| {
                 let e = crate::synth::exemplar::Exemplar::load(
@@ -149,6 +159,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "sweep kiwi 128",
+            min_runs: 1,
             what: "sweep designer: a radial section swept to 128^3 with noise, a skin and 100 seed inclusions (target <= 2 s)",
             prepare: |_| {
                 use crate::synth::sweep;
@@ -167,6 +178,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "stereology 128",
+            min_runs: 1,
             what: "particles from database/sources/ihc.png: profiles, unfolding, placement, annealing, and the photograph copied into particles and binder by guided block synthesis, 128^3 (target <= 20 s)",
             prepare: |root| {
                 let img =
@@ -196,6 +208,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "lst fill kiwi",
+            min_runs: 1,
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
             prepare: |_| {
                 let a = crate::solid::lst::anchors::kiwi(
@@ -209,6 +222,7 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "lst fill cake",
+            min_runs: 1,
             what: "lapped solid texture, type 1-b, layered slab at about 2,734 tets (seed 000: 416 s; target <= 20 s)",
             prepare: |_| {
                 let a = crate::solid::lst::anchors::cake(
@@ -222,57 +236,68 @@ pub fn workloads() -> Vec<Workload> {
         },
         Workload {
             name: "lst cut kiwi",
+            min_runs: 1,
             what: "plane through the filled kiwi: marching tetrahedra and every vertex's colour (seed 000: 78 ms; target <= 5 ms)",
             prepare: lst_cut_step,
         },
         Workload {
             name: "lst cut uterus",
+            min_runs: 1,
             what: "plane through the bundled scene's lapped uterine wall (1-b, default resolution): marching tetrahedra and every vertex's colour",
             prepare: lst_cut_uterus,
         },
         Workload {
             name: "morph points",
+            min_runs: 1,
             what: "1M points between the brain MRI slices of tests/data/morph, histogram matching on, warps precomputed (seed 003: 20,000 points/s; target >= 2M points/s, <= 0.5 s)",
             prepare: |root| morph_step(root, false),
         },
         Workload {
             name: "morph cut 512",
+            min_runs: 1,
             what: "a 512x512 oblique cut through the same morph (target <= 150 ms)",
             prepare: |root| morph_step(root, true),
         },
         Workload {
             name: "section bunny",
+            min_runs: 1,
             what: "oblique plane through the middle: loops, triangulation, block colours (target < 5 ms)",
             prepare: section_step,
         },
         #[cfg(feature = "render")]
         Workload {
             name: "frame default",
+            min_runs: 1,
             what: "the default scene drawn 960x720 after a texture drag step (uniform write, draw, read back), on this machine's GPU adapter",
             prepare: frame_step,
         },
         Workload {
             name: "synth 128->256",
+            min_runs: 1,
             what: "FNPTS, tileable, from a 128x128 gravel crop (target: half Embark's time)",
             prepare: |root| synth_step(root, 128, 256),
         },
         Workload {
             name: "synth 256->512",
+            min_runs: 1,
             what: "FNPTS, tileable, from a 256x256 gravel crop (target: half Embark's time)",
             prepare: |root| synth_step(root, 256, 512),
         },
         Workload {
             name: "synth3d 64",
+            min_runs: 1,
             what: "FNPTS block 64^3 from a 64x64 gravel crop (target < 10 s)",
             prepare: |root| synth3d_step(root, 64),
         },
         Workload {
             name: "synth3d 128",
+            min_runs: 1,
             what: "FNPTS block 128^3 from a 128x128 gravel crop (target < 60 s)",
             prepare: |root| synth3d_step(root, 128),
         },
         Workload {
             name: "bake hysteroscopy_myomas",
+            min_runs: 1,
             what: "the default scene: cavity, unwraps, blends, contrast, .glb, preview (target < 20 s)",
             prepare: |root| {
                 let scene = root.join("scenes").join("hysteroscopy_myomas.toml");
@@ -284,6 +309,24 @@ pub fn workloads() -> Vec<Workload> {
                     bake(&scene, out.path(), &BakeOptions::default(), &Silent).map(drop)
                 }))
             },
+        },
+        Workload {
+            name: "carve wall step",
+            min_runs: TUNNEL_STEPS,
+            what: "one step of a burr (r 1.5) tunnelling round the default bake's wall (254k tets, LST): new faces, atlas texels at 8/unit, corner colours; 100 steps (target: median <= 2 ms, worst <= 8 ms)",
+            prepare: carve_tunnel_step,
+        },
+        Workload {
+            name: "carve 10k tets",
+            min_runs: 1,
+            what: "a new session on the default wall, then 10,000 tets removed in one call: new faces, uvs, corner colours, texels in the background (target <= 30 ms)",
+            prepare: |root| carve_10k(root, false),
+        },
+        Workload {
+            name: "carve 10k tets + texels",
+            min_runs: 1,
+            what: "the same, waiting for the background job's atlas texels",
+            prepare: |root| carve_10k(root, true),
         },
     ]
 }
@@ -442,12 +485,94 @@ fn lst_cut_uterus(root: &Path) -> Result<Step> {
     }))
 }
 
+/// Steps of the tunnel the carving workloads, tests and examples carve.
+pub const TUNNEL_STEPS: usize = 100;
+
+/// Point `step` (0 to `TUNNEL_STEPS`) of a tunnel round the default
+/// scene's uterine wall at mid-depth: z = 20, an ellipse of semi-axes 18.5
+/// and 11.8 units, 95% of the way round. A burr of radius 1.5 along it
+/// removes some 30-60 of the wall's tets a step.
+pub fn wall_tunnel(step: usize) -> glam::DVec3 {
+    let a = step as f64 / TUNNEL_STEPS as f64 * 0.95 * std::f64::consts::TAU;
+    glam::DVec3::new(18.5 * a.cos(), 11.8 * a.sin(), 20.0)
+}
+
+/// The default scene baked once per process (untimed), for the carving
+/// workloads.
+fn default_bake(root: &Path) -> Result<&'static Path> {
+    static BAKED: std::sync::OnceLock<tempfile::TempDir> = std::sync::OnceLock::new();
+    if let Some(dir) = BAKED.get() {
+        return Ok(dir.path());
+    }
+    let dir = tempfile::tempdir().map_err(|e| crate::Error::io(Path::new("/tmp"), e))?;
+    let scene = root.join("scenes").join("hysteroscopy_myomas.toml");
+    bake(&scene, dir.path(), &BakeOptions::default(), &Silent)?;
+    Ok(BAKED.get_or_init(|| dir).path())
+}
+
+/// The default wall opened and a session started (untimed); each timed
+/// run carves the tunnel's next step.
+fn carve_tunnel_step(root: &Path) -> Result<Step> {
+    use crate::runtime::{Bake, Carving, CarvingOptions, Tool};
+    let node = Bake::open(default_bake(root)?)?.node("uterus")?;
+    let mut carving = Carving::new(node, CarvingOptions::default())?;
+    let mut step = 0;
+    Ok(Box::new(move || {
+        if step == TUNNEL_STEPS {
+            // Round again in a new session (runs past the tunnel).
+            carving = Carving::new(carving.node().clone(), CarvingOptions::default())?;
+            step = 0;
+        }
+        step += 1;
+        let tool = Tool::Capsule {
+            a: wall_tunnel(step - 1),
+            b: wall_tunnel(step),
+            radius: 1.5,
+        };
+        carving.carve(&tool).map(drop)
+    }))
+}
+
+/// A session started and 10,000 tets removed by id in one call (SOFA's
+/// stress test: 10,000 of 19,409), the ball of tets nearest a point in
+/// the wall; with `texels`, until the background texels are written.
+fn carve_10k(root: &Path, texels: bool) -> Result<Step> {
+    use crate::runtime::{Bake, Carving, CarvingOptions};
+    let node = Bake::open(default_bake(root)?)?.node("uterus")?;
+    let mesh = node.require_tets()?;
+    let centre = glam::DVec3::new(-18.5, 0.0, 25.0);
+    let mut by_distance: Vec<(f64, u32)> = (0..mesh.num_tets())
+        .map(|t| {
+            let c = mesh.corners(t);
+            (
+                ((c[0] + c[1] + c[2] + c[3]) / 4.0).distance(centre),
+                t as u32,
+            )
+        })
+        .collect();
+    by_distance.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let ids: Vec<u32> = by_distance[..10_000].iter().map(|&(_, t)| t).collect();
+    let options = CarvingOptions {
+        background_texels: true,
+        ..Default::default()
+    };
+    Ok(Box::new(move || {
+        let mut carving = Carving::new(node.clone(), options)?;
+        carving.remove(&ids)?;
+        if texels {
+            carving.wait();
+        }
+        Ok(())
+    }))
+}
+
 /// Time `workload`'s step `runs` times (at least once) on the inputs under
 /// `root`.
 pub fn time(workload: &Workload, root: &Path, runs: usize) -> Result<Timing> {
     let mut step = (workload.prepare)(root)?;
-    let mut secs = Vec::with_capacity(runs.max(1));
-    for _ in 0..runs.max(1) {
+    let runs = runs.max(workload.min_runs).max(1);
+    let mut secs = Vec::with_capacity(runs);
+    for _ in 0..runs {
         let start = Instant::now();
         step()?;
         secs.push(start.elapsed().as_secs_f64());

@@ -207,13 +207,13 @@ pub extern "C" fn organtex_carving_new(
     })
 }
 
-/// Free a carving session (NULL is fine); waits for its background job.
+/// Free a carving session (NULL is fine); stops its background job.
 #[unsafe(no_mangle)]
 pub extern "C" fn organtex_carving_free(carving: *mut organtex_carving) {
     if !carving.is_null() {
         // SAFETY: made by organtex_carving_new, freed once by the caller.
-        let mut c = unsafe { Box::from_raw(carving) };
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| c.carving.wait()));
+        let c = unsafe { Box::from_raw(carving) };
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(c)));
     }
 }
 

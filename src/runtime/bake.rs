@@ -12,6 +12,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use glam::DVec3;
 
 use super::model::Model;
+use super::tool::CentroidGrid;
 use crate::error::{Error, Result};
 use crate::scene::interior::InteriorLine;
 use crate::solid::lst::{LstInterior, LstModel};
@@ -122,6 +123,8 @@ pub struct Node {
     tets: Option<TetMesh>,
     /// Per tet, the tet across each face (`TetMesh::face_adjacency`).
     adjacency: OnceLock<Vec<[u32; 4]>>,
+    /// The tets' centroids binned, for tools.
+    centroids: OnceLock<CentroidGrid>,
 }
 
 impl Node {
@@ -176,6 +179,7 @@ impl Node {
             model,
             tets,
             adjacency: OnceLock::new(),
+            centroids: OnceLock::new(),
         })
     }
 
@@ -188,6 +192,7 @@ impl Node {
             model,
             tets,
             adjacency: OnceLock::new(),
+            centroids: OnceLock::new(),
         }
     }
 
@@ -224,6 +229,15 @@ impl Node {
         Ok(self.adjacency.get_or_init(|| adjacency))
     }
 
+    /// The tets' centroids in a grid, for the tets under a tool.
+    pub fn centroids(&self) -> Result<&CentroidGrid> {
+        if let Some(g) = self.centroids.get() {
+            return Ok(g);
+        }
+        let grid = CentroidGrid::new(self.require_tets()?);
+        Ok(self.centroids.get_or_init(|| grid))
+    }
+
     /// The colours at `points`; refuses a point that is not finite.
     pub fn colours(&self, points: &[DVec3]) -> Result<Vec<[u8; 3]>> {
         check_points(points)?;
@@ -251,7 +265,10 @@ impl Node {
             .tets
             .as_ref()
             .map_or(0, |t| 24 * t.positions.len() + 16 * t.tets.len());
-        self.model.bytes() + tets + self.adjacency.get().map_or(0, |a| 16 * a.len())
+        self.model.bytes()
+            + tets
+            + self.adjacency.get().map_or(0, |a| 16 * a.len())
+            + self.centroids.get().map_or(0, CentroidGrid::bytes)
     }
 }
 

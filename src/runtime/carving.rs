@@ -27,6 +27,7 @@
 
 use std::collections::HashMap;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -34,7 +35,7 @@ use rayon::prelude::*;
 
 use super::atlas::{AtlasOptions, Chart, CutAtlas, Rect};
 use super::bake::Node;
-use super::tool::{CentroidGrid, Tool};
+use super::tool::Tool;
 use crate::error::{Error, Result};
 use crate::tetra::mesh::{NO_NEIGHBOUR, TET_FACES};
 
@@ -92,13 +93,15 @@ pub struct Step {
 /// barycentric coordinates in the tet.
 type FaceJob = (Chart, [DVec3; 3], usize, [[f64; 4]; 3]);
 
-/// Texels being filled in the background.
-type Pending = std::thread::JoinHandle<Vec<(Chart, Vec<u8>)>>;
+/// Texels being filled in the background, and the flag that stops them.
+struct Pending {
+    job: std::thread::JoinHandle<Vec<(Chart, Vec<u8>)>>,
+    stop: Arc<AtomicBool>,
+}
 
 /// A carving session over one node's tet mesh.
 pub struct Carving {
     node: Arc<Node>,
-    grid: Arc<CentroidGrid>,
     alive: Vec<bool>,
     removed_count: usize,
     options: CarvingOptions,
@@ -114,11 +117,10 @@ impl Carving {
     pub fn new(node: Arc<Node>, options: CarvingOptions) -> Result<Carving> {
         let mesh = node.require_tets()?;
         node.adjacency()?;
+        node.centroids()?;
         let atlas = CutAtlas::new(options.atlas)?;
-        let grid = Arc::new(CentroidGrid::new(mesh));
         Ok(Carving {
             alive: vec![true; mesh.num_tets()],
-            grid,
             node,
             removed_count: 0,
             options,
@@ -181,7 +183,8 @@ impl Carving {
         let start = Instant::now();
         tool.check()?;
         let mut removed: Vec<u32> = self
-            .grid
+            .node
+            .centroids()?
             .under(tool)
             .into_iter()
             .filter(|&t| self.alive[t as usize])
@@ -338,9 +341,12 @@ impl Carving {
         let background = self.options.background_texels && !jobs.is_empty();
         if background {
             let node = node.clone();
-            self.pending = Some(std::thread::spawn(move || fill(&node, &jobs)));
+            let stop = Arc::new(AtomicBool::new(false));
+            let flag = stop.clone();
+            let job = std::thread::spawn(move || fill(&node, &jobs, &flag));
+            self.pending = Some(Pending { job, stop });
         } else {
-            for (chart, rgba) in fill(&node, &jobs) {
+            for (chart, rgba) in fill(&node, &jobs, &AtomicBool::new(false)) {
                 self.atlas.write(&chart, &rgba);
             }
         }
@@ -367,14 +373,14 @@ impl Carving {
 
     /// Whether a background job is still filling texels.
     pub fn texels_pending(&self) -> bool {
-        self.pending.as_ref().is_some_and(|p| !p.is_finished())
+        self.pending.as_ref().is_some_and(|p| !p.job.is_finished())
     }
 
     fn wait_texels(&mut self) -> Vec<(u32, Rect)> {
-        if let Some(job) = self.pending.take() {
+        if let Some(p) = self.pending.take() {
             // A panic in the job is a bug; its faces keep clear texels
             // rather than taking the session down.
-            let filled = job.join().unwrap_or_default();
+            let filled = p.job.join().unwrap_or_default();
             for (chart, rgba) in filled {
                 self.atlas.write(&chart, &rgba);
             }
@@ -415,20 +421,33 @@ impl Carving {
         self.charts.get(&id).and_then(|&c| self.atlas.chart(c))
     }
 
-    /// Bytes the session holds beside its node.
+    /// Bytes the session holds beside its node (whose tet index sessions
+    /// share).
     pub fn bytes(&self) -> usize {
-        self.alive.len() + self.atlas.bytes() + 12 * self.charts.capacity() + self.grid.bytes()
+        self.alive.len() + self.atlas.bytes() + 12 * self.charts.capacity()
     }
 }
 
-/// The texels of each job's chart.
-fn fill(node: &Node, jobs: &[FaceJob]) -> Vec<(Chart, Vec<u8>)> {
+impl Drop for Carving {
+    /// A background job's texels are for this session alone: stop it.
+    fn drop(&mut self) {
+        if let Some(p) = self.pending.take() {
+            p.stop.store(true, Ordering::Relaxed);
+            let _ = p.job.join();
+        }
+    }
+}
+
+/// The texels of each job's chart; none once `stop` is set.
+fn fill(node: &Node, jobs: &[FaceJob], stop: &AtomicBool) -> Vec<(Chart, Vec<u8>)> {
     jobs.par_iter()
         .map(|(chart, points, t, bary)| {
-            (
-                *chart,
-                node.model().face_texels(chart, *points, Some((*t, *bary))),
-            )
+            let texels = if stop.load(Ordering::Relaxed) {
+                Vec::new()
+            } else {
+                node.model().face_texels(chart, *points, Some((*t, *bary)))
+            };
+            (*chart, texels)
         })
         .collect()
 }

@@ -18,6 +18,7 @@ use crate::scene::file::{MeshSpec, SceneSpec};
 use crate::synth::block::MAX_BLOCK;
 use crate::synth::exemplar::Exemplar;
 use crate::synth::volume::Volume;
+use glam::DVec3;
 
 /// OBJ (`mesh::io::obj::parse`): on success, see `check_mesh`.
 pub fn obj(bytes: &[u8]) {
@@ -408,4 +409,179 @@ pub fn mask(bytes: &[u8]) {
             .all(|(&v, m)| !v || m[0] >= 128),
         "a pixel masked out (darker than half) is usable"
     );
+}
+
+/// A carving session (`runtime::Carving`) driven by bytes: each op a
+/// removal by ids (some past the mesh or repeated), a sphere or a capsule
+/// (positions and radii including 0, negative, huge, NaN and infinite),
+/// or a wait, over a cube of 6 x 4 x 4 x 4 tets. After an accepted step
+/// the carved surface is closed and consistently oriented and equals the
+/// last one less the vanished faces plus the appeared ones; after a
+/// refused one it is unchanged and the session goes on.
+pub fn carving(bytes: &[u8]) {
+    use crate::runtime::{Carving, CarvingOptions, Tool};
+    use std::collections::HashMap;
+    let node = fuzz_cube();
+    let background = bytes.first().is_some_and(|b| b & 1 == 1);
+    let options = CarvingOptions {
+        background_texels: background,
+        atlas: crate::runtime::AtlasOptions {
+            texels_per_unit: 20.0,
+            page_size: 64,
+        },
+    };
+    let mut c = Carving::new(node.clone(), options).expect("a carving of the cube");
+    let n = node.tet_mesh().expect("tets").num_tets() as u32;
+    let surface = |c: &Carving| -> HashMap<u32, [u32; 3]> {
+        c.surface().into_iter().map(|(id, f, _)| (id, f)).collect()
+    };
+    let mut now = surface(&c);
+    let mut at = 1;
+    let mut take = |k: usize| -> &[u8] {
+        let s = &bytes[at.min(bytes.len())..(at + k).min(bytes.len())];
+        at += k;
+        s
+    };
+    let coordinate = |b: u8| match b {
+        250 => f64::NAN,
+        251 => f64::INFINITY,
+        252 => -1e300,
+        _ => b as f64 / 200.0 * 1.4 - 0.2,
+    };
+    let radius = |b: u8| match b {
+        0 => 0.0,
+        1 => -0.5,
+        2 => f64::NAN,
+        3 => 1e9,
+        _ => b as f64 / 255.0 * 0.6,
+    };
+    for _ in 0..24 {
+        let op = take(1);
+        let Some(&op) = op.first() else { break };
+        let result = match op % 4 {
+            0 => {
+                let count = take(1).first().map_or(0, |&k| k as usize % 9);
+                let ids: Vec<u32> = take(2 * count)
+                    .chunks_exact(2)
+                    .map(|b| u16::from_le_bytes([b[0], b[1]]) as u32 % (n + 8))
+                    .collect();
+                c.remove(&ids)
+            }
+            1 => {
+                let b = take(4);
+                let at = |i: usize| b.get(i).copied().unwrap_or(100);
+                let centre = DVec3::new(coordinate(at(0)), coordinate(at(1)), coordinate(at(2)));
+                c.carve(&Tool::Sphere {
+                    centre,
+                    radius: radius(at(3)),
+                })
+            }
+            2 => {
+                let b = take(7);
+                let at = |i: usize| b.get(i).copied().unwrap_or(100);
+                let p = |k: usize| {
+                    DVec3::new(
+                        coordinate(at(k)),
+                        coordinate(at(k + 1)),
+                        coordinate(at(k + 2)),
+                    )
+                };
+                c.carve(&Tool::Capsule {
+                    a: p(0),
+                    b: p(3),
+                    radius: radius(at(6)),
+                })
+            }
+            _ => {
+                c.wait();
+                continue;
+            }
+        };
+        if let Ok(step) = result {
+            for gone in &step.vanished {
+                assert_eq!(
+                    now.remove(&gone.id),
+                    Some(gone.vertices),
+                    "vanished {}",
+                    gone.id
+                );
+            }
+            for f in &step.appeared {
+                assert!(
+                    now.insert(f.id, f.vertices).is_none(),
+                    "appeared twice {}",
+                    f.id
+                );
+                assert!(f.uvs.iter().flatten().all(|u| (0.0..=1.0).contains(u)));
+            }
+        }
+        assert_eq!(now, surface(&c), "the session's surface");
+        // Closed and oriented: each directed edge once, its reverse once
+        // (removal by ids may leave two fans at an edge: then twice each).
+        let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+        for f in now.values() {
+            for k in 0..3 {
+                *directed.entry((f[k], f[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &k) in &directed {
+            assert_eq!(directed.get(&(b, a)), Some(&k), "edge {a}->{b}");
+        }
+    }
+    c.wait();
+}
+
+/// The unit cube as 4 x 4 x 4 cells of six tets each (Kuhn's
+/// subdivision, conforming), its interior a small block.
+fn fuzz_cube() -> std::sync::Arc<crate::runtime::Node> {
+    use crate::runtime::{Model, Node};
+    static CUBE: std::sync::OnceLock<std::sync::Arc<Node>> = std::sync::OnceLock::new();
+    CUBE.get_or_init(|| {
+        let k = 4;
+        let id = |x: usize, y: usize, z: usize| (x + (k + 1) * (y + (k + 1) * z)) as u32;
+        let mut positions = Vec::new();
+        for z in 0..=k {
+            for y in 0..=k {
+                for x in 0..=k {
+                    positions.push(DVec3::new(x as f64, y as f64, z as f64) / k as f64);
+                }
+            }
+        }
+        let mut tets = Vec::new();
+        for z in 0..k {
+            for y in 0..k {
+                for x in 0..k {
+                    let c = |i: usize| id(x + (i & 1), y + (i >> 1 & 1), z + (i >> 2 & 1));
+                    // The six paths from corner 0 to corner 7 through the
+                    // cube's edges.
+                    for path in [[1, 3], [1, 5], [2, 3], [2, 6], [4, 5], [4, 6]] {
+                        let mut t = [c(0), c(path[0]), c(path[1]), c(7)];
+                        let q = t.map(|v| positions[v as usize]);
+                        if crate::tetra::mesh::signed_volume(&q) < 0.0 {
+                            t.swap(2, 3);
+                        }
+                        tets.push(t);
+                    }
+                }
+            }
+        }
+        let mesh = crate::tetra::TetMesh {
+            positions,
+            tets,
+            ..Default::default()
+        };
+        let volume = Volume {
+            size: [4, 4, 4],
+            spacing: 0.1,
+            voxels: (0..64u8).map(|i| [i * 4, 255 - i * 4, i]).collect(),
+        };
+        let placement = crate::solid::Placement::new(DVec3::ZERO, 0.1).expect("a placement");
+        std::sync::Arc::new(Node::new(
+            "cube",
+            crate::solid::InteriorMethod::Fnpts,
+            Model::Block { volume, placement },
+            Some(mesh),
+        ))
+    })
+    .clone()
 }

@@ -36,6 +36,7 @@ const TARGETS: &[(&str, Target)] = &[
     ("lst", fuzz::lst),
     ("image", fuzz::image),
     ("mask", fuzz::mask),
+    ("carving", fuzz::carving),
 ];
 
 /// Set in a child process: "TARGET:FILE" to replay.

@@ -131,6 +131,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     parser.add_argument("--out", default=str(ROOT / "target" / "bake-check"))
+    parser.add_argument("--glb", action="append", default=[], metavar="FILE",
+                        help="also validate this .glb and load it with trimesh (e.g. a carved surface "
+                             "written through the C API); repeatable")
     args = parser.parse_args()
     ensure_validator()
 
@@ -183,6 +186,21 @@ def main():
         else:
             print(f"  trimesh loaded {len(geometry[0].faces)} textured triangles")
         glbs.append(cut / "cut.glb")
+
+    for extra in map(Path, args.glb):
+        print(f"\n== {extra}", flush=True)
+        import trimesh
+
+        if not extra.is_file():
+            failures.append(f"{extra}: missing")
+            continue
+        scene = trimesh.load(str(extra), force="scene", process=False)
+        faces = sum(len(g.faces) for g in scene.geometry.values())
+        textured = sum(1 for g in scene.geometry.values() if getattr(g.visual, "uv", None) is not None)
+        if faces == 0 or textured == 0:
+            failures.append(f"{extra}: no textured triangles")
+        print(f"  trimesh loaded {faces} triangles in {len(scene.geometry)} primitives, {textured} textured")
+        glbs.append(extra)
 
     print("\n== glTF validator", flush=True)
     validator = subprocess.run(["node", str(ROOT / "tools" / "validate_gltf.js"), *map(str, glbs)], env={"GLTF_VALIDATOR_DIR": str(VALIDATOR / "node_modules" / "gltf-validator"), "PATH": shutil.os.environ.get("PATH", "")})

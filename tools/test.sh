@@ -36,7 +36,7 @@ need_apt mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri
 export NODEVICE_SELECT=1
 
 step "cargo fmt --check"
-cargo fmt --check
+cargo fmt --all --check
 
 step "cargo test --release (renderer on Vulkan)"
 WGPU_BACKEND=vulkan cargo test --release
@@ -50,15 +50,42 @@ repo="$PWD"
 (cd "$gl_out" && WGPU_BACKEND=gl cargo run --release -q --manifest-path "$repo/Cargo.toml" >/dev/null)
 test -s "$gl_out/out/preview.png"
 grep -q '"preview_renderer": ".*(Gl)"' "$gl_out/out/report.json"
-rm -rf "$gl_out"
 echo "preview.png drawn on GL"
+# The default bake, kept for the runtime's tests from C, C++, C# and Python.
+bake="$PWD/target/test-bake"
+rm -rf "$bake"
+mv "$gl_out/out" "$bake"
+rm -rf "$gl_out"
 
 step "tools/fuzz.sh --smoke (every parser's fuzz target, 10,000 inputs each)"
 command -v g++ >/dev/null 2>&1 || need_apt g++
 tools/fuzz.sh --smoke
 
-step "cargo clippy --release --all-targets -- -D warnings"
+step "cargo clippy --release --all-targets -- -D warnings (organtex and its C API)"
 cargo clippy --release --all-targets -- -D warnings
+cargo clippy --release --all-targets -p organtex-capi -- -D warnings
+
+step "C API: the committed header is cbindgen's; installed; C, C++ examples built by CMake against the installed package and run by ctest; again under AddressSanitizer; pkg-config; C# by P/Invoke"
+need_apt cmake pkg-config mono-mcs mono-runtime
+cargo test --release -p organtex-capi
+capi_prefix="$PWD/target/capi-install"
+rm -rf "$capi_prefix" target/capi-examples target/capi-examples-asan
+capi/install.sh --prefix "$capi_prefix"
+for variant in plain asan; do
+    dir=target/capi-examples; sanitize=OFF
+    [ "$variant" = asan ] && dir=target/capi-examples-asan && sanitize=ON
+    cmake -S capi/examples -B "$dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$capi_prefix" \
+        -DORGANTEX_BAKE="$bake" -DORGANTEX_SANITIZE="$sanitize" >/dev/null
+    cmake --build "$dir" -j 2 >/dev/null
+    ASAN_OPTIONS=detect_leaks=1 ctest --test-dir "$dir" --output-on-failure
+done
+PKG_CONFIG_PATH="$capi_prefix/lib/pkgconfig" pkg-config --exists --print-errors "organtex >= 0.1"
+# shellcheck disable=SC2046
+cc -std=c99 -o target/capi-examples/carve_pkgconfig capi/examples/carve.c \
+    $(PKG_CONFIG_PATH="$capi_prefix/lib/pkgconfig" pkg-config --cflags --libs organtex) -lm
+LD_LIBRARY_PATH="$capi_prefix/lib" target/capi-examples/carve_pkgconfig "$bake" target/capi-examples/carved_pkgconfig.glb >/dev/null
+mcs -out:target/capi-examples/Carve.exe capi/examples/Carve.cs
+LD_LIBRARY_PATH="$capi_prefix/lib" mono target/capi-examples/Carve.exe "$bake"
 
 step "tools/crosscheck.py (organtex info vs pymeshlab)"
 python3 tools/crosscheck.py --organtex target/release/organtex
@@ -66,8 +93,8 @@ python3 tools/crosscheck.py --organtex target/release/organtex
 step "tools/compare_uv.py --quick (organtex unwrap vs xatlas and pymeshlab)"
 python3 tools/compare_uv.py --quick --organtex target/release/organtex
 
-step "tools/check_bakes.py (every scene baked, Khronos glTF validator, trimesh)"
-python3 tools/check_bakes.py --organtex target/release/organtex
+step "tools/check_bakes.py (every scene baked and the C example's carved surface: Khronos glTF validator, trimesh)"
+python3 tools/check_bakes.py --organtex target/release/organtex --glb target/capi-examples/carved.glb
 
 step "tools/compare_morph.py --quick --uterus --check (morph vs nearest slice and cross-fading on a brain MRI; the bundled uterus scene's cuts)"
 python3 tools/compare_morph.py --quick --uterus --check --organtex target/release/organtex
@@ -83,6 +110,6 @@ if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/python" -c 'import pytest, numpy
 fi
 (cd python && VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --release -q)
 PYO3_PYTHON="$venv/bin/python" cargo clippy --release -p organtex-python -- -D warnings
-"$venv/bin/python" -m pytest -q python/tests
+ORGANTEX_TEST_BAKE="$bake" "$venv/bin/python" -m pytest -q python/tests
 
 step "all checks passed"

@@ -1,0 +1,54 @@
+//! The side panel: the scene's facets and Unwrap, then the rooms below
+//! (shelf, texture, layers, cut plane, carving).
+
+use eframe::egui;
+
+use super::Viewer;
+
+impl Viewer {
+    pub(super) fn side_panel(&mut self, ui: &mut egui::Ui) {
+        let Some(doc) = &self.doc else {
+            ui.label("Open a scene or a mesh (Open…).");
+            return;
+        };
+        ui.heading(&doc.spec.name);
+        ui.label("Facets");
+        let facets = doc.facets();
+        let mut select = None;
+        for (f, name) in facets {
+            if ui
+                .selectable_label(self.selected == Some(f), name)
+                .clicked()
+            {
+                select = Some(f);
+            }
+        }
+        if let Some(f) = select {
+            self.select(f);
+        }
+        ui.separator();
+        let unwrapping = self.jobs.unwrap.is_some();
+        if ui
+            .add_enabled(!unwrapping, egui::Button::new("Unwrap"))
+            .on_hover_text("Cut every facet along hidden seams and flatten it (Seamster + ABF++)")
+            .clicked()
+        {
+            self.unwrap();
+        }
+        self.shelf_panel(ui);
+        self.texture_panel(ui);
+        ui.separator();
+        ui.label("Show");
+        let before = self.layers;
+        ui.checkbox(&mut self.layers.seam_blend, "seam blend");
+        ui.checkbox(&mut self.layers.bump, "bump");
+        ui.checkbox(&mut self.layers.overlay, "overlay");
+        ui.checkbox(&mut self.layers.wireframe, "wireframe");
+        ui.checkbox(&mut self.layers.seams, "seams");
+        ui.checkbox(&mut self.layers.heat, "distortion");
+        if self.layers != before {
+            self.touch();
+        }
+        self.cut_plane_panel(ui);
+    }
+}

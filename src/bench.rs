@@ -474,7 +474,7 @@ fn lst_cut_uterus(root: &Path) -> Result<Step> {
             "the bundled scene's uterus is no longer generated",
         ));
     };
-    let a = lst::anchors::uterus_wall(params, &Default::default(), lst::TextureType::Layered)?;
+    let a = uterus_wall(params, &Default::default(), lst::TextureType::Layered)?;
     let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
     let interior = lst::LstInterior::new(model.into(), exemplar.into())?;
@@ -483,6 +483,34 @@ fn lst_cut_uterus(root: &Path) -> Result<Step> {
         std::hint::black_box(interior.cut_colours(&cut));
         Ok(())
     }))
+}
+
+/// The LST anchor of the bundled scene's uterine wall (`scene::uterus`
+/// with a wall thickness), its tets made
+/// with `tet_options`: depth 0 at the serosa, 1 at the cavity (facet
+/// "wall"), a patch the bundled block's 10 units, no strokes.
+pub fn uterus_wall(
+    params: &crate::scene::uterus::CavityParams,
+    tet_options: &crate::tetra::TetOptions,
+    kind: crate::solid::lst::TextureType,
+) -> Result<crate::solid::lst::anchors::Anchor> {
+    let surface = crate::scene::uterus::generate(params)
+        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))?;
+    let (depth_outer, depth_inner) =
+        crate::solid::lst::facet_depth_points(&surface, "serosa", "wall")?;
+    let tets = crate::tetra::tetrahedralise(&surface, tet_options, &Silent)?;
+    Ok(crate::solid::lst::anchors::Anchor {
+        surface,
+        tets,
+        options: crate::solid::lst::LstOptions {
+            kind,
+            scale: 10.0,
+            strokes: Vec::new(),
+            depth_outer,
+            depth_inner,
+            seed: 3,
+        },
+    })
 }
 
 /// Steps of the tunnel the carving workloads, tests and examples carve.

@@ -4,10 +4,11 @@
 //!
 //! The estimates are of what the stages really hold at their peak; they
 //! are approximate (within a factor of about 1.5), enough to tell a job
-//! that fits from one that cannot.
+//! that fits from one that cannot. Each stage makes its own (it knows its
+//! sizes: `synth::fnpts::memory_bytes`, `synth::block::memory_bytes`,
+//! the tet mesher's); this file keeps the budget and the refusal.
 
 use crate::error::{Error, Result};
-use crate::synth::block::Method;
 
 /// Assumed available memory when /proc/meminfo cannot be read (not Linux,
 /// or a sandbox hiding it).
@@ -102,31 +103,6 @@ pub fn product(factors: &[u64]) -> u64 {
     factors.iter().fold(1u64, |p, &f| p.saturating_mul(f))
 }
 
-/// Peak memory of 2D synthesis (`synth::fnpts`) of a `width` x `height`
-/// texture, with the PNG written from it: per output pixel the level's
-/// coordinate, colour and count (8 bytes, and the coarser level's quarter
-/// while refining), the result's colour and coordinates and their rolled
-/// copy (22), the image handed to the encoder (3 to 6).
-pub fn texture_bytes(width: usize, height: usize) -> u64 {
-    product(&[width as u64, height as u64, 36])
-}
-
-/// Peak memory of 3D block synthesis (`synth::block`) of a `size`^3 block
-/// from `exemplars` distinct exemplars. Per voxel, FNPTS holds a coordinate,
-/// a colour per exemplar and a count (and the coarser level's eighth while
-/// refining), the interleaved classes' voxel lists (8), and at the end the
-/// block and its rolled copy (6); optimize holds three coordinates, a
-/// colour, per-plane search results and weights (36) and the same lists and
-/// copies.
-pub fn block_bytes(size: usize, exemplars: usize, method: Method) -> u64 {
-    let per_voxel = match method {
-        Method::Fnpts => 24 + 3 * exemplars as u64,
-        Method::Optimize => 66,
-    };
-    let n = size as u64;
-    product(&[n, n, n, per_voxel])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,10 +136,9 @@ mod tests {
     }
 
     #[test]
-    fn estimates_grow_with_the_work_and_saturate() {
-        assert_eq!(block_bytes(0, 1, Method::Fnpts), 0);
-        assert!(block_bytes(256, 1, Method::Optimize) > block_bytes(256, 3, Method::Fnpts));
-        assert_eq!(texture_bytes(usize::MAX, usize::MAX), u64::MAX);
+    fn products_saturate_and_sizes_print_in_gib() {
+        assert_eq!(product(&[u64::MAX, 2]), u64::MAX);
+        assert_eq!(product(&[3, 0, 7]), 0);
         assert_eq!(gib(3 << 29), "1.5");
         assert_eq!(gib(1 << 28), "0.25");
     }

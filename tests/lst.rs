@@ -257,7 +257,7 @@ fn layered_walls_align_with_their_depth() {
         cells: Some(30000),
         ..Default::default()
     };
-    let w = anchors::uterus_wall(&params, &cells, TextureType::Layered).expect("wall");
+    let w = organtex::bench::uterus_wall(&params, &cells, TextureType::Layered).expect("wall");
     let (tets, serosa, cavity) = (w.tets, w.options.depth_outer, w.options.depth_inner);
     let c = cake(TextureType::Layered, 2734);
     for (name, mesh, outer, inner, kind) in [

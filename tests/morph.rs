@@ -522,7 +522,7 @@ fn a_curved_cut_is_textured_from_the_morph() {
         "{close} of {} triangles show the morph at their centre",
         cut.triangles.len()
     );
-    let glb = organtex::solid::cut_glb(&cut, &texture).unwrap();
+    let glb = organtex::scene::gltf::cut_glb(&cut, &texture).unwrap();
     assert_eq!(&glb[..4], b"glTF");
 }
 

@@ -12,7 +12,7 @@ use organtex::mesh::shapes::torus;
 use organtex::mesh::{Topology, TriMesh, io};
 use organtex::solid::{
     Block, Placement, Plane, SAMPLE_BLOCK_WGSL, Section, plane_section, render_section,
-    sample_colours, section_glb, texture_coordinates, texture_surface,
+    sample_colours, texture_coordinates, texture_surface,
 };
 use organtex::synth::volume::Volume;
 
@@ -372,7 +372,7 @@ fn the_section_glb_is_a_textured_mesh() {
         2000.0,
     )
     .unwrap();
-    let bytes = section_glb(&s, &img).unwrap();
+    let bytes = organtex::scene::gltf::section_glb(&s, &img).unwrap();
     assert_eq!(&bytes[0..4], b"glTF");
     let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
     let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();

@@ -11,7 +11,7 @@ use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
 use organtex::mesh::{Components, Topology, TriMesh, VertexId, io};
 use organtex::progress::Silent;
 use organtex::unwrap::cutgraph::Cut;
-use organtex::unwrap::overlap::overlapping_pairs;
+use organtex::unwrap::intersect::overlapping_pairs;
 use organtex::unwrap::seamster::{self, Distortion, SeamOptions};
 use organtex::unwrap::terminals::{disc_curvature, select};
 use organtex::unwrap::visibility::Viewpoints;

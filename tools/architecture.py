@@ -30,6 +30,7 @@ from pathlib import Path
 FLOORS = [
     ["main", "cli", "bench"],
     ["app"],
+    ["bake"],
     ["render"],
     ["runtime"],
     ["scene"],

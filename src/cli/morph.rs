@@ -10,7 +10,7 @@ use std::time::Instant;
 use glam::DVec3;
 use organtex::mesh::{Topology, io};
 use organtex::solid::morph::{Morph, MorphOptions};
-use organtex::solid::{Interior, Plane, cut_glb, render_section, texture_cut};
+use organtex::solid::{Interior, Plane, render_section, texture_cut};
 use organtex::{Error, Result, memory};
 
 use super::progress::Bars;
@@ -154,7 +154,7 @@ pub fn run(args: Args) -> Result<()> {
             let texture = texture_cut(cut, &morph, args.texels_per_unit)
                 .map_err(|e| e.in_file(args.surface.as_deref().unwrap_or(&args.mesh)))?;
             let seconds = t.elapsed().as_secs_f64();
-            let bytes = cut_glb(cut, &texture)?;
+            let bytes = organtex::scene::gltf::cut_glb(cut, &texture)?;
             organtex::atomic::write_file(&args.output, |w| w.write_all(&bytes))?;
             let covered = texture.image.pixels().filter(|p| p[3] == 255).count();
             (

@@ -11,7 +11,7 @@ use organtex::mesh::{Topology, TriMesh, io};
 use organtex::solid::lst::{LstInterior, LstModel};
 use organtex::solid::morph::{Morph, MorphOptions};
 use organtex::solid::{
-    Block, Placement, Plane, Section, SectionImage, plane_section, render_section, section_glb,
+    Block, Placement, Plane, Section, SectionImage, plane_section, render_section,
 };
 use organtex::synth::volume::Volume;
 use organtex::{Error, Result, memory};
@@ -205,7 +205,7 @@ pub(super) fn write(
     glb: bool,
 ) -> Result<()> {
     if glb {
-        let bytes = section_glb(section, image)?;
+        let bytes = organtex::scene::gltf::section_glb(section, image)?;
         organtex::atomic::write_file(output, |w| w.write_all(&bytes))
     } else {
         organtex::atomic::write_png(

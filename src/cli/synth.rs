@@ -68,7 +68,7 @@ fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
 
 /// Pyramid levels, 1 to `MAX_LEVELS` (the library's own bound).
 pub(super) fn levels_in_range(s: &str) -> std::result::Result<usize, String> {
-    use organtex::synth::block::MAX_LEVELS;
+    use organtex::synth::fnpts::MAX_LEVELS;
     s.trim()
         .parse::<usize>()
         .ok()
@@ -90,7 +90,7 @@ pub fn run(args: Args) -> Result<()> {
     let (w, h) = args.size;
     memory::ensure_fits(
         &format!("synthesising a {w}x{h} texture (--size)"),
-        memory::texture_bytes(w, h),
+        organtex::synth::fnpts::memory_bytes(w, h),
     )?;
     let exemplar = Exemplar::load(&args.source, args.mask.as_deref(), args.crop)?;
     exemplar

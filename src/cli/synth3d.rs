@@ -99,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
     let n = args.size;
     memory::ensure_fits(
         &format!("synthesising a {n}x{n}x{n} block (--size)"),
-        memory::block_bytes(n, paths.len(), method),
+        organtex::synth::block::memory_bytes(n, paths.len(), method),
     )?;
     let exemplars = paths
         .iter()
@@ -173,7 +173,7 @@ fn run_layered(args: &Args) -> Result<()> {
     let n = args.size;
     memory::ensure_fits(
         &format!("synthesising a {n}x{n}x{n} layered block (--size)"),
-        memory::block_bytes(n, 1, Method::Optimize),
+        organtex::synth::block::memory_bytes(n, 1, Method::Optimize),
     )?;
     let exemplar = Exemplar::load(&args.source, args.mask.as_deref(), args.crop)?;
     // Scaling up by more than 2 would invent the layers' detail.

@@ -182,7 +182,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
                 .map_err(|e| e.in_file(&source))?;
             crate::memory::ensure_fits(
                 &format!("tissue '{}': a {}x{} texture", t.id, p.width, p.height),
-                crate::memory::texture_bytes(p.width, p.height),
+                crate::synth::fnpts::memory_bytes(p.width, p.height),
             )
             .map_err(|e| e.in_file(&db.root.join("index.toml")))?;
             Some(synthesize(&ex, &opts, progress).map_err(|e| e.in_file(&source))?)

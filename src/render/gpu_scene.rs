@@ -8,17 +8,13 @@ use std::collections::HashMap;
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
-use super::renderer::Renderer;
+use super::pipelines::{Renderer, VERTEX_FLOATS};
 use crate::error::Result;
 use crate::scene::composite::Transform;
 use crate::scene::draw::{DrawList, LayerKind, Material, Stream};
 use crate::solid::Placement;
 use crate::solid::lst::gpu::CutBuffers;
 use crate::synth::volume::Volume;
-
-/// Floats per vertex: position 3, normal 3, uv 2, alpha 1, tangent 4,
-/// heat 1.
-pub(super) const VERTEX_FLOATS: usize = 14;
 
 pub(super) struct GpuPrimitive {
     pub vertices: wgpu::Buffer,

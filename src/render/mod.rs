@@ -5,19 +5,24 @@
 //! overlays, cut surfaces sampling the interior block as a 3D texture,
 //! and wireframe, seam and distortion views.
 //!
-//! One code path: `Renderer::render` draws into any colour and depth
-//! view. `Offscreen` owns such a pair and reads it back as an image (the
+//! One code path: `Renderer::render` (`frame`) draws into any colour and
+//! depth view, with the pipelines of `pipelines`; `gpu_scene` holds a
+//! scene's data on the GPU. `Offscreen` owns such a pair and reads it back as an image (the
 //! bake's preview.png, tests, `organtex view --screenshot`); the viewer
 //! hands the same pair's colour texture to egui to show.
 
 mod camera;
+mod frame;
 mod gpu;
 mod gpu_scene;
+mod offscreen;
+mod pipelines;
 mod preview;
-mod renderer;
 
 pub use camera::OrbitCamera;
+pub use frame::{Layers, View};
 pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};
+pub use offscreen::Offscreen;
+pub use pipelines::Renderer;
 pub use preview::preview;
-pub use renderer::{Layers, Offscreen, Renderer, View};

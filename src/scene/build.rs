@@ -23,8 +23,8 @@ use crate::mesh::repair::make_manifold;
 use crate::mesh::{Facets, Topology, TriMesh, io};
 use crate::progress::{CancelOnly, Progress, check};
 use crate::unwrap::flatten::Method;
+use crate::unwrap::intersect::overlapping_pairs;
 use crate::unwrap::metrics::UvMetrics;
-use crate::unwrap::overlap::overlapping_pairs;
 use crate::unwrap::visibility::{self, Viewpoints};
 use crate::unwrap::{UnwrapOptions, unwrap_seen};
 

@@ -15,7 +15,7 @@ use toml::Spanned;
 
 use super::uterus::CavityParams;
 use crate::error::{Error, Result};
-use crate::memory::{block_bytes, check, product};
+use crate::memory::{check, product};
 use crate::solid::InteriorMethod;
 use crate::synth::block::{MAX_BLOCK, Method};
 use crate::unwrap::seamster::SeamOptions;
@@ -358,7 +358,7 @@ pub fn load(path: &Path) -> Result<SceneSpec> {
                 InteriorMethod::Layered => Method::Optimize,
                 m => m.block().unwrap_or(Method::Fnpts),
             };
-            block_bytes(spec.bake.interior_voxels, 1, method)
+            crate::synth::block::memory_bytes(spec.bake.interior_voxels, 1, method)
         })
         .max()
     {

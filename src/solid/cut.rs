@@ -11,6 +11,7 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
+use super::interior::Placement;
 use super::section::Section;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
@@ -21,50 +22,6 @@ use crate::synth::volume::Volume;
 /// point, as `sample_points` does on the CPU (see the file's comments for
 /// the bindings and the sampler it needs).
 pub const SAMPLE_BLOCK_WGSL: &str = include_str!("sample_block.wgsl");
-
-/// Where the block sits in object space: the object point `p` is at voxel
-/// coordinates `(p - origin) / scale`, so `scale` is the object units one
-/// voxel spans and `origin` is where the block's corner (voxel 0's low
-/// corner) lies. The block repeats in every direction from there.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Placement {
-    pub origin: DVec3,
-    pub scale: f64,
-}
-
-impl Placement {
-    /// Refuses a non-finite origin and a scale that is not positive.
-    pub fn new(origin: DVec3, scale: f64) -> Result<Placement> {
-        if !(origin.is_finite() && scale > 0.0 && scale.is_finite()) {
-            return Err(Error::invalid(format!(
-                "the block placement needs a finite origin and a positive scale, \
-                 not origin {origin} and scale {scale}"
-            )));
-        }
-        Ok(Placement { origin, scale })
-    }
-
-    /// The block at the origin, a voxel spanning its own spacing (NRRD's
-    /// `spacings`, in object units).
-    pub fn of_volume(volume: &Volume) -> Placement {
-        Placement {
-            origin: DVec3::ZERO,
-            scale: volume.spacing,
-        }
-    }
-
-    /// Voxel coordinates of an object-space point.
-    #[inline]
-    pub fn voxel(&self, p: DVec3) -> DVec3 {
-        (p - self.origin) / self.scale
-    }
-
-    /// The uniform `SAMPLE_BLOCK_WGSL` reads: origin x, y, z, then scale.
-    pub fn uniform(&self) -> [f32; 4] {
-        let o = self.origin.as_vec3();
-        [o.x, o.y, o.z, self.scale as f32]
-    }
-}
 
 /// 3D texture coordinates, in voxel units, of object-space points.
 pub fn texture_coordinates(points: &[DVec3], placement: &Placement) -> Vec<[f32; 3]> {
@@ -192,20 +149,4 @@ pub fn render_section(
             }
         });
     Ok(out)
-}
-
-/// The section as a .glb: its triangles facing the plane's normal, with
-/// uvs into `image` (from `render_section`) as their base colour texture.
-pub fn section_glb(section: &Section, image: &SectionImage) -> Result<Vec<u8>> {
-    let uvs: Vec<DVec2> = (0..section.positions.len() as u32)
-        .map(|i| image.uv(section.plane_point(i)))
-        .collect();
-    crate::scene::gltf::textured_mesh(
-        "section",
-        &section.positions,
-        &vec![section.normal; section.positions.len()],
-        &uvs,
-        &section.triangles,
-        &image::DynamicImage::ImageRgba8(image.image.clone()),
-    )
 }

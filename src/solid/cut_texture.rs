@@ -140,31 +140,3 @@ pub fn texture_cut(
         .collect();
     Ok(CutTexture { uvs, image })
 }
-
-/// The cut as a .glb: its triangles (corners not shared, each with its
-/// chart's uv) with the texture as base colour. Triangles of zero area
-/// draw nothing and have no normal: they are left out.
-pub fn cut_glb(cut: &TriMesh, texture: &CutTexture) -> Result<Vec<u8>> {
-    let (mut positions, mut normals, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
-    for (t, tri) in cut.triangles.iter().enumerate() {
-        let p = tri.map(|i| cut.positions[i as usize]);
-        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        if n == DVec3::ZERO {
-            continue;
-        }
-        positions.extend(p);
-        normals.extend([n; 3]);
-        uvs.extend(&texture.uvs[3 * t..3 * t + 3]);
-    }
-    let triangles: Vec<[u32; 3]> = (0..positions.len() as u32 / 3)
-        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
-        .collect();
-    crate::scene::gltf::textured_mesh(
-        "cut",
-        &positions,
-        &normals,
-        &uvs,
-        &triangles,
-        &image::DynamicImage::ImageRgba8(texture.image.clone()),
-    )
-}

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::synth::block::{BlockOptions, Method, synthesize_block};
 use crate::synth::exemplar::{Exemplar, read_image};
@@ -36,10 +36,54 @@ pub trait Interior: Sync {
     }
 }
 
+/// Where the block sits in object space: the object point `p` is at voxel
+/// coordinates `(p - origin) / scale`, so `scale` is the object units one
+/// voxel spans and `origin` is where the block's corner (voxel 0's low
+/// corner) lies. The block repeats in every direction from there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub origin: DVec3,
+    pub scale: f64,
+}
+
+impl Placement {
+    /// Refuses a non-finite origin and a scale that is not positive.
+    pub fn new(origin: DVec3, scale: f64) -> Result<Placement> {
+        if !(origin.is_finite() && scale > 0.0 && scale.is_finite()) {
+            return Err(Error::invalid(format!(
+                "the block placement needs a finite origin and a positive scale, \
+                 not origin {origin} and scale {scale}"
+            )));
+        }
+        Ok(Placement { origin, scale })
+    }
+
+    /// The block at the origin, a voxel spanning its own spacing (NRRD's
+    /// `spacings`, in object units).
+    pub fn of_volume(volume: &Volume) -> Placement {
+        Placement {
+            origin: DVec3::ZERO,
+            scale: volume.spacing,
+        }
+    }
+
+    /// Voxel coordinates of an object-space point.
+    #[inline]
+    pub fn voxel(&self, p: DVec3) -> DVec3 {
+        (p - self.origin) / self.scale
+    }
+
+    /// The uniform `SAMPLE_BLOCK_WGSL` reads: origin x, y, z, then scale.
+    pub fn uniform(&self) -> [f32; 4] {
+        let o = self.origin.as_vec3();
+        [o.x, o.y, o.z, self.scale as f32]
+    }
+}
+
 /// A block tiled through space from its placement (seed 004, 3.3).
 pub struct Block<'a> {
     pub volume: &'a Volume,
-    pub placement: super::cut::Placement,
+    pub placement: Placement,
 }
 
 impl Interior for Block<'_> {

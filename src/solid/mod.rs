@@ -15,9 +15,9 @@ pub mod section;
 pub mod stereology;
 
 pub use cut::{
-    Placement, SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours,
-    sample_points, section_glb, texture_coordinates, texture_surface,
+    SAMPLE_BLOCK_WGSL, SectionImage, SurfaceTexture, render_section, sample_colours, sample_points,
+    texture_coordinates, texture_surface,
 };
-pub use cut_texture::{CutTexture, cut_glb, texture_cut};
-pub use interior::{Block, Interior, InteriorMethod, interior_block};
+pub use cut_texture::{CutTexture, texture_cut};
+pub use interior::{Block, Interior, InteriorMethod, Placement, interior_block};
 pub use section::{Frame, Plane, Section, capped, plane_section};

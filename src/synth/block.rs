@@ -36,13 +36,17 @@ use rayon::prelude::*;
 
 use super::exemplar::Exemplar;
 use super::fnpts::{
-    ColourBuckets, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, check_search, losing_match, penalised,
-    window,
+    ColourBuckets, MAX_LEVELS, MAX_PIXEL_COST, RANDOM_CANDIDATES, RING, check_search, losing_match,
+    penalised, window,
 };
 use super::volume::Volume;
 use crate::error::{Error, Result};
 use crate::progress::{Progress, check};
 use crate::rng;
+
+/// The largest block side, in voxels: 256^3 voxels take about 200 MB of
+/// synthesis state (optimize: 0.9 GB).
+pub const MAX_BLOCK: usize = 256;
 
 /// Which synthesis fills the block (scene files name it in lower case).
 /// FNPTS is sharp, but slices across x can show diagonal streaks (one
@@ -218,13 +222,6 @@ struct GuideLevel {
     block: Vec<u8>,
     penalty: i64,
 }
-
-/// The largest block side, in voxels: 256^3 voxels take about 200 MB of
-/// synthesis state (optimize: 0.9 GB).
-pub const MAX_BLOCK: usize = 256;
-/// Most pyramid levels, 2D or 3D: each halves the exemplar, so 16 would
-/// already need one 2^15 pixels a side (and shifts stay far from overflow).
-pub const MAX_LEVELS: usize = 16;
 
 /// Check the options and exemplars; the number of pyramid levels.
 fn check_options(exemplars: &[Exemplar], opts: &BlockOptions) -> Result<usize> {
@@ -840,5 +837,32 @@ impl<'a> Block<'a> {
             spacing: 1.0,
             voxels,
         }
+    }
+}
+
+/// Peak memory of 3D block synthesis of a `size`^3 block
+/// from `exemplars` distinct exemplars. Per voxel, FNPTS holds a coordinate,
+/// a colour per exemplar and a count (and the coarser level's eighth while
+/// refining), the interleaved classes' voxel lists (8), and at the end the
+/// block and its rolled copy (6); optimize holds three coordinates, a
+/// colour, per-plane search results and weights (36) and the same lists and
+/// copies.
+pub fn memory_bytes(size: usize, exemplars: usize, method: Method) -> u64 {
+    let per_voxel = match method {
+        Method::Fnpts => 24 + 3 * exemplars as u64,
+        Method::Optimize => 66,
+    };
+    let n = size as u64;
+    crate::memory::product(&[n, n, n, per_voxel])
+}
+
+#[cfg(test)]
+mod memory_tests {
+    use super::*;
+
+    #[test]
+    fn the_memory_estimate_grows_with_the_block() {
+        assert_eq!(memory_bytes(0, 1, Method::Fnpts), 0);
+        assert!(memory_bytes(256, 1, Method::Optimize) > memory_bytes(256, 3, Method::Fnpts));
     }
 }

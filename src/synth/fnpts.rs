@@ -183,6 +183,10 @@ impl Synthesis {
     }
 }
 
+/// Most pyramid levels, 2D or 3D: each halves the exemplar, so 16 would
+/// already need one 2^15 pixels a side (and shifts stay far from overflow).
+pub const MAX_LEVELS: usize = 16;
+
 /// Smallest side of the coarsest exemplar and output that the default
 /// pyramid goes down to (module doc: "Pyramid depth"). 32 for both left
 /// the database's 90 to 340 pixel crops two or three levels, and the fine
@@ -196,10 +200,10 @@ const COARSEST_OUTPUT: usize = 32;
 fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
     let mut pyramid = vec![ex.clone()];
     match opts.levels {
-        Some(levels) if !(1..=crate::synth::block::MAX_LEVELS).contains(&levels) => {
+        Some(levels) if !(1..=MAX_LEVELS).contains(&levels) => {
             return Err(Error::invalid(format!(
                 "levels must be from 1 to {}, not {levels}",
-                crate::synth::block::MAX_LEVELS
+                MAX_LEVELS
             )));
         }
         Some(levels) => {
@@ -572,4 +576,25 @@ pub(super) fn window(r: i32) -> Vec<(i32, i32)> {
         .collect();
     w.sort_by_key(|&(dx, dy)| (dx * dx + dy * dy, dy, dx));
     w
+}
+
+/// Peak memory of 2D synthesis of a `width` x `height`
+/// texture, with the PNG written from it: per output pixel the level's
+/// coordinate, colour and count (8 bytes, and the coarser level's quarter
+/// while refining), the result's colour and coordinates and their rolled
+/// copy (22), the image handed to the encoder (3 to 6).
+pub fn memory_bytes(width: usize, height: usize) -> u64 {
+    crate::memory::product(&[width as u64, height as u64, 36])
+}
+
+#[cfg(test)]
+mod memory_tests {
+    use super::*;
+
+    #[test]
+    fn the_memory_estimate_grows_with_the_texture_and_saturates() {
+        assert_eq!(memory_bytes(0, 10), 0);
+        assert!(memory_bytes(512, 512) > memory_bytes(256, 256));
+        assert_eq!(memory_bytes(usize::MAX, usize::MAX), u64::MAX);
+    }
 }

@@ -108,7 +108,7 @@ pub fn tetrahedralise_report(
             "give an edge length or a cell count, not both",
         )),
         (Some(h), None) => {
-            let m = nonempty(stuffing::stuff(mesh, h, opts.graded, progress)?, h)?;
+            let m = nonempty(stuff(mesh, h, opts.graded, progress)?, h)?;
             Ok((
                 m,
                 TetReport {
@@ -160,7 +160,7 @@ fn default_resolution(
     let mut h = diagonal / DEFAULT_DIVISIONS;
     let mut kept: Option<(TetMesh, TetReport, [f64; 2])> = None;
     for attempts in 1..=1 + MAX_REFINEMENTS {
-        let m = stuffing::stuff(mesh, h, graded, progress)?;
+        let m = stuff(mesh, h, graded, progress)?;
         if m.num_tets() == 0 {
             if attempts > MAX_REFINEMENTS {
                 return Err(nonempty(m, h).unwrap_err());
@@ -237,7 +237,7 @@ fn by_count(
         volume = 0.5 * ext.x.max(1e-12) * ext.y.max(1e-12) * ext.z.max(1e-12);
     }
     let mut h = (12.0 * volume / cells as f64).cbrt();
-    let first = nonempty(stuffing::stuff(mesh, h, graded, progress)?, h)?;
+    let first = nonempty(stuff(mesh, h, graded, progress)?, h)?;
     let ratio = first.num_tets() as f64 / cells as f64;
     if (ratio - 1.0).abs() <= 0.1 {
         return Ok((
@@ -253,7 +253,7 @@ fn by_count(
     // Graded counts grow like 1/h^2 where the surface sets them.
     h *= ratio.powf(if graded { 0.5 } else { 1.0 / 3.0 });
     drop(first);
-    let m = nonempty(stuffing::stuff(mesh, h, graded, progress)?, h)?;
+    let m = nonempty(stuff(mesh, h, graded, progress)?, h)?;
     Ok((
         m,
         TetReport {
@@ -263,4 +263,58 @@ fn by_count(
             graded,
         },
     ))
+}
+
+/// Stuff the inside of `mesh` (winding number above 1/2) with tets on the
+/// lattice of cell size `h`, uniform (`stuffing`) or graded (`graded`),
+/// refusing a lattice too large for the machine or the mesher's indices.
+fn stuff(mesh: &TriMesh, h: f64, graded: bool, progress: &dyn Progress) -> Result<TetMesh> {
+    let (lo, hi) = stuffing::check_input(mesh)?;
+    if !(h.is_finite() && h > 0.0) {
+        return Err(Error::invalid(format!(
+            "the edge length must be a positive number, not {h}"
+        )));
+    }
+    let lattice = stuffing::Lattice::covering(lo, hi, h);
+    let box_volume = (hi - lo).x * (hi - lo).y * (hi - lo).z;
+    let fill = if box_volume > 0.0 {
+        (mesh.signed_volume().abs() / box_volume).max(0.1)
+    } else {
+        0.1
+    };
+    let (vertices, cubes) = lattice.counts();
+    let bytes = if graded {
+        graded::estimate_bytes(cubes, mesh.area(), h)
+    } else {
+        stuffing::estimate_bytes(&lattice, fill)
+    };
+    crate::memory::ensure_fits(
+        &format!(
+            "a {}tet mesh with edge length {h} ({vertices:.3e} lattice vertices, {}x{}x{} cells)",
+            if graded { "graded " } else { "" },
+            lattice.cubes[0],
+            lattice.cubes[1],
+            lattice.cubes[2]
+        ),
+        bytes.min(u64::MAX as f64) as u64,
+    )?;
+    let most = if graded {
+        ((1u64 << 20) - 32) as f64
+    } else {
+        u32::MAX as f64 / 1.5
+    };
+    let widest = lattice.cubes.iter().copied().max().unwrap_or(0) as f64;
+    if (!graded && vertices >= most) || (graded && widest >= most) {
+        return Err(Error::invalid(format!(
+            "edge length {h} needs {vertices:.3e} lattice vertices ({}x{}x{} cells), more than \
+             the mesher's indices hold; choose a larger edge length",
+            lattice.cubes[0], lattice.cubes[1], lattice.cubes[2]
+        )));
+    }
+    let winding = winding::Winding::new(mesh);
+    if graded {
+        graded::stuff_graded(&winding, &lattice, progress)
+    } else {
+        stuffing::stuff_lattice(&winding, &lattice, progress)
+    }
 }

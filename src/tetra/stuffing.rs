@@ -277,59 +277,6 @@ pub fn estimate_bytes(lattice: &Lattice, fill: f64) -> f64 {
     vertices * (8.0 + 1.0 + 4.0 + 5.0) + tets * (2.0 * 16.0 + 24.0 / 5.0)
 }
 
-/// Stuff the inside of `mesh` (winding number above 1/2) with tets on the
-/// lattice of cell size `h`, uniform or graded (`super::graded`).
-pub fn stuff(mesh: &TriMesh, h: f64, graded: bool, progress: &dyn Progress) -> Result<TetMesh> {
-    let (lo, hi) = check_input(mesh)?;
-    if !(h.is_finite() && h > 0.0) {
-        return Err(Error::invalid(format!(
-            "the edge length must be a positive number, not {h}"
-        )));
-    }
-    let lattice = Lattice::covering(lo, hi, h);
-    let box_volume = (hi - lo).x * (hi - lo).y * (hi - lo).z;
-    let fill = if box_volume > 0.0 {
-        (mesh.signed_volume().abs() / box_volume).max(0.1)
-    } else {
-        0.1
-    };
-    let (vertices, cubes) = lattice.counts();
-    let bytes = if graded {
-        super::graded::estimate_bytes(cubes, mesh.area(), h)
-    } else {
-        estimate_bytes(&lattice, fill)
-    };
-    crate::memory::ensure_fits(
-        &format!(
-            "a {}tet mesh with edge length {h} ({vertices:.3e} lattice vertices, {}x{}x{} cells)",
-            if graded { "graded " } else { "" },
-            lattice.cubes[0],
-            lattice.cubes[1],
-            lattice.cubes[2]
-        ),
-        bytes.min(u64::MAX as f64) as u64,
-    )?;
-    let most = if graded {
-        ((1u64 << 20) - 32) as f64
-    } else {
-        u32::MAX as f64 / 1.5
-    };
-    let widest = lattice.cubes.iter().copied().max().unwrap_or(0) as f64;
-    if (!graded && vertices >= most) || (graded && widest >= most) {
-        return Err(Error::invalid(format!(
-            "edge length {h} needs {vertices:.3e} lattice vertices ({}x{}x{} cells), more than \
-             the mesher's indices hold; choose a larger edge length",
-            lattice.cubes[0], lattice.cubes[1], lattice.cubes[2]
-        )));
-    }
-    let winding = Winding::new(mesh);
-    if graded {
-        super::graded::stuff_graded(&winding, &lattice, progress)
-    } else {
-        stuff_lattice(&winding, &lattice, progress)
-    }
-}
-
 /// Steps 2 to 4 on a lattice that fits (checked by `stuff`).
 pub(crate) fn stuff_lattice(
     winding: &Winding,

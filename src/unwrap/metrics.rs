@@ -204,7 +204,7 @@ pub fn measure(mesh: &TriMesh, topo: &Topology, edge_visibility: &[f32]) -> Opti
     let flips = (0..charts).map(|c| positive[c].min(negative[c])).sum();
     let degenerate = jac.iter().filter(|j| j.2 == 0.0).count();
     let mut overlapping = vec![false; nf];
-    for [f, g] in super::overlap::overlapping_pairs(&layer.triangles, &layer.coords) {
+    for [f, g] in super::intersect::overlapping_pairs(&layer.triangles, &layer.coords) {
         overlapping[f as usize] = true;
         overlapping[g as usize] = true;
     }

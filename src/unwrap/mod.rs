@@ -13,6 +13,7 @@ pub mod conformal;
 pub mod cutgraph;
 pub mod debug;
 pub mod flatten;
+pub mod intersect;
 pub mod layout;
 pub mod metrics;
 pub mod overlap;

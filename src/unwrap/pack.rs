@@ -435,7 +435,7 @@ fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::unwrap::overlap::triangles_overlap;
+    use crate::unwrap::intersect::triangles_overlap;
 
     #[test]
     fn a_turned_rectangle_is_turned_back_wider_than_tall() {

@@ -1,8 +1,8 @@
 //! The meshes seed 000's Table 1 is measured on, made here at about its
 //! tet counts: a kiwi-like ellipsoid (type 2-b, 4,126 tets in the paper)
 //! and a layered cake-like slab (1-b, 2,734), with their depth constraints,
-//! strokes and a layered exemplar, and the uterine wall the bundled scene
-//! laps; `organtex bench` and the tests fill them.
+//! strokes and a layered exemplar; `organtex bench` and the tests fill
+//! them (and the bundled scene's uterine wall, `bench::uterus_wall`).
 
 use glam::DVec3;
 
@@ -18,32 +18,6 @@ pub struct Anchor {
     pub surface: TriMesh,
     pub tets: TetMesh,
     pub options: LstOptions,
-}
-
-/// A uterine wall (`scene::uterus` with a wall thickness), its tets made
-/// with `tet_options`: depth 0 at the serosa, 1 at the cavity (facet
-/// "wall"), a patch the bundled block's 10 units, no strokes.
-pub fn uterus_wall(
-    params: &crate::scene::uterus::CavityParams,
-    tet_options: &TetOptions,
-    kind: TextureType,
-) -> Result<Anchor> {
-    let surface = crate::scene::uterus::generate(params)
-        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))?;
-    let (depth_outer, depth_inner) = super::facet_depth_points(&surface, "serosa", "wall")?;
-    let tets = tetra::tetrahedralise(&surface, tet_options, &Silent)?;
-    Ok(Anchor {
-        surface,
-        tets,
-        options: LstOptions {
-            kind,
-            scale: 10.0,
-            strokes: Vec::new(),
-            depth_outer,
-            depth_inner,
-            seed: 3,
-        },
-    })
 }
 
 fn tets(surface: &TriMesh, cells: usize) -> Result<TetMesh> {

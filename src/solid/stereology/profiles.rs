@@ -9,6 +9,7 @@
 //! w x h is wholly seen only when its box falls inside the frame, a chance
 //! of (W - w)(H - h) / WH).
 
+use super::watershed::four_neighbours;
 use crate::error::{Error, Result};
 use crate::rng;
 
@@ -197,18 +198,6 @@ pub fn find(
         pixels: pixels.to_vec(),
         valid: valid.to_vec(),
     })
-}
-
-/// Pixel `i`'s left, right, upper and lower neighbours, where the image
-/// has them.
-pub(super) fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
-    let (x, y) = (i % width, i / width);
-    [
-        (x > 0).then(|| i - 1),
-        (x + 1 < width).then(|| i + 1),
-        (y > 0).then(|| i - width),
-        (y + 1 < height).then(|| i + width),
-    ]
 }
 
 /// 4-connected components of the usable pixels where `inside` holds:

@@ -8,7 +8,6 @@
 //! the smaller particle's inscribed radius, so the bumps of one irregular
 //! profile stay together.
 
-use super::profiles::four_neighbours;
 use crate::mesh::dsu::DisjointSets;
 
 /// A saddle at under this fraction of the lower peak splits two basins.
@@ -16,6 +15,18 @@ const NECK: f64 = 0.7;
 /// Peaks lower than this (pixels from the binder) never split off: pixel
 /// noise on a profile's edge, not a particle.
 const MIN_PEAK: f64 = 2.0;
+
+/// Pixel `i`'s left, right, upper and lower neighbours, where the image
+/// has them.
+pub(super) fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<usize>; 4] {
+    let (x, y) = (i % width, i / width);
+    [
+        (x > 0).then(|| i - 1),
+        (x + 1 < width).then(|| i + 1),
+        (y > 0).then(|| i - width),
+        (y + 1 < height).then(|| i + width),
+    ]
+}
 
 /// Per pixel its profile (1-based, 0 not a particle) after splitting the
 /// particle pixels' 4-connected regions at their necks, and per profile

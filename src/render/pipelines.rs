@@ -1,80 +1,42 @@
-//! The pipelines and the one draw routine (`Renderer::render`), and the
-//! offscreen target that reads a frame back as an image.
+//! The pipelines the renderer draws with (facets, blend layers, lines,
+//! cuts through blocks and lapped solid textures, carved faces), their bind
+//! group layouts and samplers, and the bind groups scene data is bound by.
+//! `gpu_scene` uploads a scene's data into bind groups made here; `frame`
+//! draws it.
 
-use glam::DVec3;
+use crate::scene::draw::Wrap;
 
-use super::camera::OrbitCamera;
-use super::gpu_scene::{GpuScene, VERTEX_FLOATS};
-use crate::error::{Error, Result};
-use crate::scene::draw::{LayerKind, Wrap};
-
-/// What a frame shows.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Layers {
-    /// Seam bands and overlap rings blended over the facets.
-    pub seam_blend: bool,
-    pub bump: bool,
-    pub overlay: bool,
-    pub wireframe: bool,
-    /// Chart boundaries (seams and facet borders) as lines.
-    pub seams: bool,
-    /// Area distortion of the flattening instead of the texture.
-    pub heat: bool,
-}
-
-impl Default for Layers {
-    fn default() -> Self {
-        Layers {
-            seam_blend: true,
-            bump: true,
-            overlay: true,
-            wireframe: false,
-            seams: false,
-            heat: false,
-        }
-    }
-}
-
-/// A frame's camera, layers and cut plane.
-#[derive(Clone, Copy, Debug)]
-pub struct View {
-    pub camera: OrbitCamera,
-    pub layers: Layers,
-    /// Points with normal . p > offset are cut away.
-    pub clip: Option<(DVec3, f64)>,
-}
-
-const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Dark red-brown, as the inside of a body looks past the light.
-const BACKGROUND: wgpu::Color = wgpu::Color {
-    r: 0.004,
-    g: 0.002,
-    b: 0.002,
-    a: 1.0,
-};
+/// Floats per vertex of the facet pipelines: position 3, normal 3, uv 2,
+/// alpha 1, tangent 4,
+/// heat 1.
+pub(super) const VERTEX_FLOATS: usize = 14;
+pub(super) const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+pub(super) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// egui takes its textures' values as sRGB-encoded bytes: a sRGB view
+/// would decode them and the window would show the picture too dark.
+pub(super) const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 pub struct Renderer {
-    globals: wgpu::Buffer,
-    globals_group: wgpu::BindGroup,
-    material_layout: wgpu::BindGroupLayout,
-    block_layout: wgpu::BindGroupLayout,
-    lst_layout: wgpu::BindGroupLayout,
-    samplers: [wgpu::Sampler; 3],
-    block_sampler: wgpu::Sampler,
+    pub(super) globals: wgpu::Buffer,
+    pub(super) globals_group: wgpu::BindGroup,
+    pub(super) material_layout: wgpu::BindGroupLayout,
+    pub(super) block_layout: wgpu::BindGroupLayout,
+    pub(super) lst_layout: wgpu::BindGroupLayout,
+    pub(super) samplers: [wgpu::Sampler; 3],
+    pub(super) block_sampler: wgpu::Sampler,
     /// Facet triangles, opaque and blended over, each drawn from both
     /// sides and, for closed organs, from the front only (`cull`).
-    opaque: [wgpu::RenderPipeline; 2],
-    blended: [wgpu::RenderPipeline; 2],
-    wire: wgpu::RenderPipeline,
-    seam: wgpu::RenderPipeline,
-    cut: wgpu::RenderPipeline,
+    pub(super) opaque: [wgpu::RenderPipeline; 2],
+    pub(super) blended: [wgpu::RenderPipeline; 2],
+    pub(super) wire: wgpu::RenderPipeline,
+    pub(super) seam: wgpu::RenderPipeline,
+    pub(super) cut: wgpu::RenderPipeline,
     /// Cuts through lapped solid textures (solid::lst::gpu).
-    lst_cut: wgpu::RenderPipeline,
+    pub(super) lst_cut: wgpu::RenderPipeline,
     /// Copies a frame into a plain-bytes texture for egui where the
     /// device cannot view one texture in two formats (`Offscreen`).
-    encode_layout: wgpu::BindGroupLayout,
-    encode: wgpu::RenderPipeline,
+    pub(super) encode_layout: wgpu::BindGroupLayout,
+    pub(super) encode: wgpu::RenderPipeline,
 }
 
 /// Reads the sRGB frame (decoded as it is loaded) and writes it encoded
@@ -505,111 +467,6 @@ impl Renderer {
             ],
         })
     }
-
-    /// Draw `scene` as `view` shows it into `colour` and `depth`
-    /// (`size` pixels), recorded into `encoder`.
-    pub fn render(
-        &self,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        (colour, depth): (&wgpu::TextureView, &wgpu::TextureView),
-        size: [u32; 2],
-        scene: &GpuScene,
-        view: &View,
-    ) {
-        let cam = &view.camera;
-        let aspect = size[0] as f64 / size[1].max(1) as f64;
-        let mut g = [0.0f32; 28];
-        g[..16].copy_from_slice(&cam.view_proj(aspect).to_cols_array());
-        let eye = cam.eye();
-        g[16..19].copy_from_slice(&eye.as_vec3().to_array());
-        g[19] = cam.distance as f32;
-        if let Some((n, d)) = view.clip {
-            g[20..23].copy_from_slice(&n.as_vec3().to_array());
-            g[23] = d as f32;
-        }
-        g[24] = if view.layers.bump { 1.0 } else { 0.0 };
-        g[25] = if view.layers.heat { 1.0 } else { 0.0 };
-        queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(&g));
-
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("scene"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: colour,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(BACKGROUND),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &self.globals_group, &[]);
-        let layers = &view.layers;
-        let shown = |layer: Option<LayerKind>| match layer {
-            None => true,
-            Some(LayerKind::Ring | LayerKind::Band) => layers.seam_blend && !layers.heat,
-            Some(LayerKind::Overlay) => layers.overlay && !layers.heat,
-            Some(LayerKind::BandOverlay) => layers.overlay && layers.seam_blend && !layers.heat,
-        };
-        // Opaque first, then the blend layers in the list's order (the
-        // compositor's stacking).
-        for blend in [false, true] {
-            for p in &scene.primitives {
-                let m = &scene.materials[p.material];
-                if m.blend != blend || !shown(p.layer) {
-                    continue;
-                }
-                let pipelines = if blend { &self.blended } else { &self.opaque };
-                pass.set_pipeline(&pipelines[!m.double_sided as usize]);
-                pass.set_bind_group(1, &m.bind_group, &[]);
-                pass.set_vertex_buffer(0, p.vertices.slice(..));
-                pass.set_index_buffer(p.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..p.index_count, 0, 0..1);
-            }
-        }
-        for (on, pipeline) in [(layers.wireframe, &self.wire), (layers.seams, &self.seam)] {
-            if !on {
-                continue;
-            }
-            pass.set_pipeline(pipeline);
-            for p in scene.primitives.iter().filter(|p| p.layer.is_none()) {
-                pass.set_bind_group(1, &scene.materials[p.material].bind_group, &[]);
-                pass.set_vertex_buffer(0, p.vertices.slice(..));
-                let (buffer, count) = if std::ptr::eq(pipeline, &self.wire) {
-                    (&p.edges, p.edge_count)
-                } else {
-                    (&p.seams, p.seam_count)
-                };
-                pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..count, 0, 0..1);
-            }
-        }
-        if let (Some(cut), Some(block)) = (&scene.cut, &scene.block) {
-            pass.set_pipeline(&self.cut);
-            pass.set_bind_group(1, &block.bind_group, &[]);
-            pass.set_vertex_buffer(0, cut.vertices.slice(..));
-            pass.set_index_buffer(cut.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..cut.index_count, 0, 0..1);
-        }
-        if let Some(cut) = &scene.lst_cut {
-            pass.set_pipeline(&self.lst_cut);
-            pass.set_bind_group(2, &cut.bind_group, &[]);
-            pass.set_vertex_buffer(0, cut.vertices.slice(..));
-            pass.draw(0..cut.vertex_count, 0..1);
-        }
-    }
 }
 
 fn encode_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
@@ -661,201 +518,6 @@ fn encode_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Rende
         cache: None,
     });
     (layout, pipeline)
-}
-
-/// egui takes its textures' values as sRGB-encoded bytes: a sRGB view
-/// would decode them and the window would show the picture too dark.
-const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-
-/// How the frame reaches egui.
-enum Display {
-    /// The frame's own texture viewed as plain bytes (needs the
-    /// VIEW_FORMATS capability).
-    Reinterpreted(wgpu::TextureView),
-    /// A second texture the frame is encoded into after each draw (GL).
-    Encoded {
-        texture: wgpu::Texture,
-        view: wgpu::TextureView,
-        frame: wgpu::BindGroup,
-    },
-}
-
-/// A colour and depth target of a fixed size, readable as an image.
-pub struct Offscreen {
-    pub size: [u32; 2],
-    pub colour: wgpu::Texture,
-    pub colour_view: wgpu::TextureView,
-    display: Display,
-    depth_view: wgpu::TextureView,
-}
-
-impl Offscreen {
-    /// A target `size` pixels on `gpu`'s device, for `renderer`'s frames.
-    pub fn new(gpu: &super::Gpu, renderer: &Renderer, size: [u32; 2]) -> Offscreen {
-        let device = &gpu.device;
-        let extent = wgpu::Extent3d {
-            width: size[0].max(1),
-            height: size[1].max(1),
-            depth_or_array_layers: 1,
-        };
-        let texture = |format, usage, view_formats: &[wgpu::TextureFormat]| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("offscreen"),
-                size: extent,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats,
-            })
-        };
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::TEXTURE_BINDING;
-        let view_formats: &[wgpu::TextureFormat] = if gpu.view_formats {
-            &[DISPLAY_FORMAT]
-        } else {
-            &[]
-        };
-        let colour = texture(COLOUR_FORMAT, usage, view_formats);
-        let colour_view = colour.create_view(&Default::default());
-        let display = if gpu.view_formats {
-            Display::Reinterpreted(colour.create_view(&wgpu::TextureViewDescriptor {
-                format: Some(DISPLAY_FORMAT),
-                ..Default::default()
-            }))
-        } else {
-            let encoded = texture(DISPLAY_FORMAT, usage, &[]);
-            Display::Encoded {
-                view: encoded.create_view(&Default::default()),
-                texture: encoded,
-                frame: device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("encode"),
-                    layout: &renderer.encode_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&colour_view),
-                    }],
-                }),
-            }
-        };
-        let depth = texture(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT, &[]);
-        Offscreen {
-            size: [extent.width, extent.height],
-            colour_view,
-            display,
-            colour,
-            depth_view: depth.create_view(&Default::default()),
-        }
-    }
-
-    /// The frame as plain sRGB-encoded bytes, for egui.
-    pub fn display_view(&self) -> &wgpu::TextureView {
-        match &self.display {
-            Display::Reinterpreted(view) | Display::Encoded { view, .. } => view,
-        }
-    }
-
-    /// Draw a frame into this target and submit it.
-    pub fn draw(
-        &self,
-        renderer: &Renderer,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &GpuScene,
-        view: &View,
-    ) {
-        let mut encoder = device.create_command_encoder(&Default::default());
-        renderer.render(
-            queue,
-            &mut encoder,
-            (&self.colour_view, &self.depth_view),
-            self.size,
-            scene,
-            view,
-        );
-        if let Display::Encoded { view, frame, .. } = &self.display {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("encode"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&renderer.encode);
-            pass.set_bind_group(0, frame, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        queue.submit([encoder.finish()]);
-    }
-
-    /// The target's pixels (sRGB, as a PNG stores them), read from what
-    /// egui shows, so that tests see the display path too.
-    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<image::RgbaImage> {
-        let shown = match &self.display {
-            Display::Reinterpreted(_) => &self.colour,
-            Display::Encoded { texture, .. } => texture,
-        };
-        let [w, h] = self.size;
-        // Rows of a texture-to-buffer copy are padded to 256 bytes.
-        let row = (4 * w).div_ceil(256) * 256;
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: (row * h) as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            shown.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        queue.submit([encoder.finish()]);
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        rx.recv()
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        let mut pixels = Vec::with_capacity((4 * w * h) as usize);
-        for y in 0..h as usize {
-            pixels.extend_from_slice(&data[y * row as usize..y * row as usize + 4 * w as usize]);
-        }
-        drop(data);
-        buffer.unmap();
-        image::RgbaImage::from_raw(w, h, pixels)
-            .ok_or_else(|| Error::invalid("GPU readback: fewer bytes than pixels"))
-    }
 }
 
 #[cfg(test)]

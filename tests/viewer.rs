@@ -463,3 +463,70 @@ fn saving_over_a_file_asks_first_and_writes_a_scene_that_loads() {
     );
     organtex::app::Document::open(&existing).expect("the saved scene opens");
 }
+
+/// The Carve tool: outside the organ, a drag over it removes the tets
+/// under the pointer through the runtime, the faces that appear are drawn
+/// textured from the interior, the surface is not drawn over them, the
+/// camera stays where it was, and the panel shows the step time.
+#[test]
+fn the_carve_tool_removes_tets_under_the_pointer_and_shows_the_inside() {
+    let mut h = viewer(Some(repo("scenes/myoma_cuts.toml")));
+    settle(&mut h);
+    {
+        let v = h.state_mut();
+        let (lo, hi) = v.doc.as_ref().unwrap().bounds().unwrap();
+        v.camera = organtex::render::OrbitCamera::fit(lo, hi);
+        v.mode = Mode::Carve;
+    }
+    h.run_steps(2);
+    settle(&mut h);
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+    assert!(h.state().carve.ready(), "the node's tets are made");
+    h.run_steps(2);
+    let before = h.state().read_scene().unwrap();
+    let eye = h.state().camera.eye();
+    let centre = h.state().view_rect().unwrap().center();
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(40.0, 12.0),
+        egui::Modifiers::NONE,
+    );
+    h.run_steps(3);
+    let v = h.state();
+    assert!(
+        v.carve.steps >= 3 && v.carve.removed > 30,
+        "{} steps, {} tets removed",
+        v.carve.steps,
+        v.carve.removed
+    );
+    assert!(v.carved_triangles() > 30, "{}", v.carved_triangles());
+    assert_eq!(v.carved_triangles(), v.carve.carved_faces());
+    assert!(
+        (v.camera.eye() - eye).length() < 1e-9,
+        "carving does not turn the view"
+    );
+    let after = v.read_scene().unwrap();
+    let changed = changed_pixels(&before, &after);
+    assert!(
+        changed > 300,
+        "the carved pit is in the picture ({changed} pixels)"
+    );
+    assert!(h.query_by_label_contains("step").is_some());
+    // A second drag digs on from the carved surface.
+    let removed = h.state().carve.removed;
+    drag(
+        &mut h,
+        centre,
+        egui::vec2(-30.0, 0.0),
+        egui::Modifiers::NONE,
+    );
+    assert!(h.state().carve.removed > removed);
+    // Reset gives every tet back and draws no carved face.
+    h.state_mut().reset_carving();
+    h.run_steps(2);
+    assert_eq!(
+        (h.state().carve.removed, h.state().carved_triangles()),
+        (0, 0)
+    );
+}

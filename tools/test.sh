@@ -38,6 +38,9 @@ export NODEVICE_SELECT=1
 step "cargo fmt --check"
 cargo fmt --all --check
 
+step "tools/architecture.py --check (arrows one way between floors, no loop between files, no file over 1000 lines)"
+python3 tools/architecture.py --check
+
 step "cargo test --release (renderer on Vulkan)"
 WGPU_BACKEND=vulkan cargo test --release
 

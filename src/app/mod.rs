@@ -17,7 +17,8 @@ use crate::error::{Error, Result};
 
 /// What the window leaves for `run`: the screenshot's outcome and the
 /// frame times.
-type Outcome = std::sync::Arc<std::sync::Mutex<Option<(Option<Result<()>>, Vec<f64>)>>>;
+type Outcome =
+    std::sync::Arc<std::sync::Mutex<Option<(Option<Result<()>>, Vec<f64>, Option<String>)>>>;
 
 /// Open the viewer window; returns when it closes. With a screenshot
 /// asked for, the window closes by itself once it is saved, and the
@@ -47,11 +48,11 @@ pub fn run(opts: Options) -> Result<()> {
         }),
     );
     result.map_err(|e| Error::invalid(format!("the viewer failed: {e}")))?;
-    let (shot, times) = slot
-        .lock()
-        .expect("not poisoned")
-        .take()
-        .unwrap_or((None, Vec::new()));
+    let (shot, times, carving) =
+        slot.lock()
+            .expect("not poisoned")
+            .take()
+            .unwrap_or((None, Vec::new(), None));
     if frames_wanted {
         match shot {
             Some(r) => r?,
@@ -69,6 +70,9 @@ pub fn run(opts: Options) -> Result<()> {
                 t.len(),
                 t[t.len() / 2] * 1e3
             );
+        }
+        if let Some(line) = carving {
+            println!("{line}");
         }
     }
     Ok(())
@@ -91,8 +95,11 @@ impl eframe::App for Reporter {
             .expect("not poisoned")
             .take();
         if let Some(r) = shot {
-            *self.out.lock().expect("not poisoned") =
-                Some((Some(r), self.viewer.frame_times.clone()));
+            *self.out.lock().expect("not poisoned") = Some((
+                Some(r),
+                self.viewer.frame_times.clone(),
+                self.viewer.carve.summary(),
+            ));
             ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
         }
     }

@@ -1,5 +1,5 @@
-//! `organtex view [SCENE|MESH] [--screenshot OUT.png] [--frames N]`: the
-//! desktop viewer.
+//! `organtex view [SCENE|MESH] [--screenshot OUT.png] [--frames N] [--drag]
+//! [--carve]`: the desktop viewer.
 
 use std::path::PathBuf;
 
@@ -25,6 +25,12 @@ pub struct Args {
     /// frame, so the frame time is that of a texture drag.
     #[arg(long, requires = "screenshot")]
     drag: bool,
+    /// With --screenshot: look at the organ from outside, turn to the
+    /// Carve tool and carve a pit under the view's centre a step a frame
+    /// (the scene's interior and tets are made first); prints the steps'
+    /// times.
+    #[arg(long, requires = "screenshot")]
+    carve: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -51,5 +57,6 @@ pub fn run(args: Args) -> Result<()> {
         screenshot: args.screenshot,
         frames: args.frames as usize,
         drag: args.drag,
+        carve: args.carve,
     })
 }

@@ -94,6 +94,20 @@ impl OrbitCamera {
         ) * view
     }
 
+    /// The ray from the eye through a point of the view: `x` and `y` from
+    /// -1 (left, bottom) to 1 (right, top), on a view `aspect` wide to
+    /// high. Origin and unit direction.
+    pub fn ray(&self, x: f64, y: f64, aspect: f64) -> (DVec3, DVec3) {
+        let inverse = self.view_proj(aspect).as_dmat4().inverse();
+        let near = inverse.project_point3(DVec3::new(x, y, 0.0));
+        let far = inverse.project_point3(DVec3::new(x, y, 1.0));
+        let eye = self.eye();
+        (
+            eye,
+            (far - near).normalize_or((self.target - eye).normalize()),
+        )
+    }
+
     /// Turn by a drag of `dx`, `dy` radians.
     pub fn orbit(&mut self, dx: f64, dy: f64) {
         self.yaw -= dx;
@@ -127,6 +141,18 @@ mod tests {
         };
         let o = OrbitCamera::from_scene(&c, 1.0);
         assert!((o.eye() - DVec3::from_array(c.position)).length() < 1e-12);
+    }
+
+    #[test]
+    fn the_centre_ray_hits_the_target() {
+        let o = OrbitCamera::fit(DVec3::splat(-1.0), DVec3::new(3.0, 1.0, 2.0));
+        let (eye, dir) = o.ray(0.0, 0.0, 1.5);
+        let to_target = (o.target - eye).normalize();
+        assert!(dir.dot(to_target) > 1.0 - 1e-9, "{dir} {to_target}");
+        // A ray through a corner leans the way the picture does.
+        let (right, up) = o.right_up();
+        let (_, corner) = o.ray(1.0, 1.0, 1.5);
+        assert!(corner.dot(right) > 0.0 && corner.dot(up) > 0.0);
     }
 
     #[test]

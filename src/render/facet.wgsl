@@ -32,6 +32,20 @@ struct Material {
 @group(1) @binding(3) var normal_texture: texture_2d<f32>;
 @group(1) @binding(4) var normal_sampler: sampler;
 
+// Where a carving tool took tissue away: a mask over a box of the scene,
+// 1 inside the carved space. The facets are not drawn there, so the faces
+// the carving exposed (drawn by carved.wgsl) show.
+struct Carve {
+    // xyz: the mask's corner; w: the object units a voxel spans.
+    origin: vec4<f32>,
+    // x: a mask is set (1) or not (0).
+    flags: vec4<f32>,
+}
+
+@group(2) @binding(0) var carve_mask: texture_3d<f32>;
+@group(2) @binding(1) var carve_sampler: sampler;
+@group(2) @binding(2) var<uniform> carve: Carve;
+
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
@@ -73,6 +87,21 @@ fn clipped(p: vec3<f32>) -> bool {
     return dot(globals.clip.xyz, globals.clip.xyz) > 0.0 && dot(globals.clip.xyz, p) > globals.clip.w;
 }
 
+fn carved(p: vec3<f32>) -> bool {
+    if carve.flags.x < 0.5 {
+        return false;
+    }
+    let c = (p - carve.origin.xyz) / carve.origin.w / vec3<f32>(textureDimensions(carve_mask));
+    if any(c < vec3<f32>(0.0)) || any(c > vec3<f32>(1.0)) {
+        return false;
+    }
+    return textureSampleLevel(carve_mask, carve_sampler, c, 0.0).r > 0.5;
+}
+
+fn hidden(p: vec3<f32>) -> bool {
+    return clipped(p) || carved(p);
+}
+
 // Light at the eye, two-sided, fading with distance.
 fn lit(n: vec3<f32>, p: vec3<f32>) -> f32 {
     let to_eye = globals.eye.xyz - p;
@@ -93,7 +122,7 @@ fn heat_colour(h: f32) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    if clipped(in.world) {
+    if hidden(in.world) {
         discard;
     }
     var n = normalize(in.normal);
@@ -122,7 +151,7 @@ fn vs_line(v: VertexIn) -> VertexOut {
 
 @fragment
 fn fs_wire(in: VertexOut) -> @location(0) vec4<f32> {
-    if clipped(in.world) {
+    if hidden(in.world) {
         discard;
     }
     return vec4<f32>(0.02, 0.02, 0.03, 1.0);
@@ -130,7 +159,7 @@ fn fs_wire(in: VertexOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_seam(in: VertexOut) -> @location(0) vec4<f32> {
-    if clipped(in.world) {
+    if hidden(in.world) {
         discard;
     }
     return vec4<f32>(1.0, 0.85, 0.0, 1.0);

@@ -103,6 +103,8 @@ impl Renderer {
             multiview_mask: None,
         });
         pass.set_bind_group(0, &self.globals_group, &[]);
+        // The facets are not drawn where a carving took tissue away.
+        pass.set_bind_group(2, scene.carved.mask().unwrap_or(&self.no_carving), &[]);
         let layers = &view.layers;
         let shown = |layer: Option<LayerKind>| match layer {
             None => true,
@@ -155,6 +157,12 @@ impl Renderer {
             pass.set_bind_group(2, &cut.bind_group, &[]);
             pass.set_vertex_buffer(0, cut.vertices.slice(..));
             pass.draw(0..cut.vertex_count, 0..1);
+        }
+        for (page, vertices, count) in scene.carved.draws() {
+            pass.set_pipeline(&self.carved);
+            pass.set_bind_group(1, page, &[]);
+            pass.set_vertex_buffer(0, vertices.slice(..));
+            pass.draw(0..count, 0..1);
         }
     }
 }

@@ -72,6 +72,8 @@ pub struct GpuScene {
     pub(super) cut: Option<GpuCut>,
     pub(super) lst_cut: Option<GpuLstCut>,
     pub(super) block: Option<GpuBlock>,
+    /// What a carving exposed (`carved`).
+    pub(super) carved: super::carved::GpuCarved,
     /// Bounds of everything drawn.
     pub bounds: Option<(DVec3, DVec3)>,
 }
@@ -373,6 +375,7 @@ impl GpuScene {
             cut: None,
             lst_cut: None,
             block: None,
+            carved: Default::default(),
             bounds: lo.cmple(hi).all().then_some((lo, hi)),
         })
     }
@@ -544,9 +547,11 @@ impl GpuScene {
         Ok(())
     }
 
-    /// Take over `old`'s interior block (a scene rebuilt keeps it).
+    /// Take over `old`'s interior block and carving (a scene rebuilt
+    /// keeps them).
     pub fn keep_block(&mut self, old: GpuScene) {
         self.block = old.block;
+        self.carved = old.carved;
     }
 
     /// Replace the cut surface (None: no cut drawn).

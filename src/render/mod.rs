@@ -12,6 +12,7 @@
 //! hands the same pair's colour texture to egui to show.
 
 mod camera;
+mod carved;
 mod frame;
 mod gpu;
 mod gpu_scene;
@@ -20,6 +21,7 @@ mod pipelines;
 mod preview;
 
 pub use camera::OrbitCamera;
+pub use carved::{CarveMask, CarvedFace};
 pub use frame::{Layers, View};
 pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};

@@ -6,6 +6,8 @@
 
 use crate::scene::draw::Wrap;
 
+/// Floats per vertex of carved faces: position 3, normal 3, uv 2.
+pub(super) const CARVED_FLOATS: usize = 8;
 /// Floats per vertex of the facet pipelines: position 3, normal 3, uv 2,
 /// alpha 1, tangent 4,
 /// heat 1.
@@ -33,6 +35,12 @@ pub struct Renderer {
     pub(super) cut: wgpu::RenderPipeline,
     /// Cuts through lapped solid textures (solid::lst::gpu).
     pub(super) lst_cut: wgpu::RenderPipeline,
+    /// Faces a carving exposed, textured from atlas pages (`carved`).
+    pub(super) carved: wgpu::RenderPipeline,
+    pub(super) carve_layout: wgpu::BindGroupLayout,
+    pub(super) page_layout: wgpu::BindGroupLayout,
+    /// The carve mask's bind group when nothing is carved.
+    pub(super) no_carving: wgpu::BindGroup,
     /// Copies a frame into a plain-bytes texture for egui where the
     /// device cannot view one texture in two formats (`Offscreen`).
     pub(super) encode_layout: wgpu::BindGroupLayout,
@@ -111,10 +119,10 @@ fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
     })
 }
 
-/// Facet shader and cut shader sources. The cut shader includes the
+/// Facet, cut and carved-face shader sources. The cut shader includes the
 /// block and LST samplers the library ships for simulators, so both draw
 /// cuts the same way.
-pub(crate) fn shader_sources() -> [String; 2] {
+pub(crate) fn shader_sources() -> [String; 3] {
     [
         include_str!("facet.wgsl").to_string(),
         format!(
@@ -123,7 +131,70 @@ pub(crate) fn shader_sources() -> [String; 2] {
             crate::solid::lst::gpu::sample_lst_wgsl(),
             include_str!("cut.wgsl")
         ),
+        include_str!("carved.wgsl").to_string(),
     ]
+}
+
+/// The carve mask's bind group: `mask` (its view, corner and voxel size),
+/// or none (a 1-voxel texture, switched off).
+pub(super) fn carve_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    sampler: &wgpu::Sampler,
+    mask: Option<(&wgpu::TextureView, [f32; 4])>,
+) -> wgpu::BindGroup {
+    let empty;
+    let (view, origin, on) = match mask {
+        Some((view, origin)) => (view, origin, 1.0),
+        None => {
+            empty = device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("no carve mask"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D3,
+                    format: wgpu::TextureFormat::R8Unorm,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default());
+            (&empty, [0.0, 0.0, 0.0, 1.0], 0.0)
+        }
+    };
+    let uniform: [f32; 8] = [
+        origin[0], origin[1], origin[2], origin[3], on, 0.0, 0.0, 0.0,
+    ];
+    let uniform = wgpu::util::DeviceExt::create_buffer_init(
+        device,
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("carve"),
+            contents: bytemuck::cast_slice(&uniform),
+            usage: wgpu::BufferUsages::UNIFORM,
+        },
+    );
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("carve mask"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: uniform.as_entire_binding(),
+            },
+        ],
+    })
 }
 
 /// A table read with textureLoad (solid/lst/sample.wgsl).
@@ -143,7 +214,11 @@ fn table_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bind
 impl Renderer {
     pub fn new(device: &wgpu::Device) -> Renderer {
         let (encode_layout, encode) = encode_pipeline(device);
-        let [facet_src, cut_src] = shader_sources();
+        let [facet_src, cut_src, carved_src] = shader_sources();
+        let carved_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("carved.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(carved_src.into()),
+        });
         let facet = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("facet.wgsl"),
             source: wgpu::ShaderSource::Wgsl(facet_src.into()),
@@ -164,6 +239,21 @@ impl Renderer {
                 sampler_entry(2),
                 texture_entry(3, wgpu::TextureViewDimension::D2),
                 sampler_entry(4),
+            ],
+        });
+        let carve_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("carve mask"),
+            entries: &[
+                texture_entry(0, wgpu::TextureViewDimension::D3),
+                sampler_entry(1),
+                uniform_entry(2, wgpu::ShaderStages::FRAGMENT),
+            ],
+        });
+        let page_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("carved page"),
+            entries: &[
+                texture_entry(0, wgpu::TextureViewDimension::D2),
+                sampler_entry(1),
             ],
         });
         let block_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -200,12 +290,21 @@ impl Renderer {
         });
         let facet_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("facet"),
-            bind_group_layouts: &[Some(&globals_layout), Some(&material_layout)],
+            bind_group_layouts: &[
+                Some(&globals_layout),
+                Some(&material_layout),
+                Some(&carve_layout),
+            ],
             immediate_size: 0,
         });
         let cut_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("cut"),
             bind_group_layouts: &[Some(&globals_layout), Some(&block_layout)],
+            immediate_size: 0,
+        });
+        let carved_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("carved"),
+            bind_group_layouts: &[Some(&globals_layout), Some(&page_layout)],
             immediate_size: 0,
         });
         let lst_cut_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -226,6 +325,13 @@ impl Renderer {
             array_stride: 24,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &cut_attributes,
+        })];
+        let carved_attributes =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+        let carved_vertices = [Some(wgpu::VertexBufferLayout {
+            array_stride: (CARVED_FLOATS * 4) as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &carved_attributes,
         })];
         let lst_attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32, 4 => Uint32
@@ -283,7 +389,22 @@ impl Renderer {
         };
         let tri = wgpu::PrimitiveTopology::TriangleList;
         let line = wgpu::PrimitiveTopology::LineList;
+        let clamp = sampler(device, wgpu::AddressMode::ClampToEdge);
+        let no_carving = carve_bind_group(device, &carve_layout, &clamp, None);
         Renderer {
+            carved: pipeline(
+                "carved",
+                &carved_layout,
+                &carved_module,
+                ("vs_carved", "fs_carved"),
+                &carved_vertices,
+                tri,
+                false,
+                false,
+            ),
+            carve_layout,
+            page_layout,
+            no_carving,
             opaque: [false, true].map(|cull| {
                 pipeline(
                     "opaque",
@@ -363,6 +484,43 @@ impl Renderer {
             // The block tiles space (sample_block.wgsl).
             block_sampler: sampler(device, wgpu::AddressMode::Repeat),
         }
+    }
+
+    /// A carved-face page's bind group (its texture, linear, clamped).
+    pub(super) fn page_bind_group(
+        &self,
+        device: &wgpu::Device,
+        page: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("carved page"),
+            layout: &self.page_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(page),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&self.samplers[2]),
+                },
+            ],
+        })
+    }
+
+    /// The carve mask's bind group for a mask texture.
+    pub(super) fn carve_mask_bind_group(
+        &self,
+        device: &wgpu::Device,
+        mask: &wgpu::TextureView,
+        origin: [f32; 4],
+    ) -> wgpu::BindGroup {
+        carve_bind_group(
+            device,
+            &self.carve_layout,
+            &self.samplers[2],
+            Some((mask, origin)),
+        )
     }
 
     pub(super) fn material_bind_group(
@@ -526,8 +684,8 @@ mod tests {
     /// fails here and not in a user's window.
     #[test]
     fn shaders_validate() {
-        let [facet, cut] = super::shader_sources();
-        for src in [facet, cut, super::ENCODE_WGSL.to_string()] {
+        let [facet, cut, carved] = super::shader_sources();
+        for src in [facet, cut, carved, super::ENCODE_WGSL.to_string()] {
             let module = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
             naga::valid::Validator::new(

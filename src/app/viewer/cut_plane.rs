@@ -22,17 +22,17 @@ pub struct CutPlane {
     pub at: f64,
 }
 
+/// What the cut plane shows inside: the interior block, and per node its
+/// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
+/// laid as the bake lays it, the block as exemplar).
 pub(super) struct Interiors {
     pub(super) block: Volume,
-    pub(super) lst: Vec<Option<crate::solid::lst::LstModel>>,
+    pub(super) lst: Vec<Option<std::sync::Arc<crate::solid::lst::LstModel>>>,
     /// Where the block lies when it does not tile from the origin (a
     /// morph sampled over its node's bounds).
     pub(super) placement: Option<Placement>,
 }
 
-/// What the cut plane shows inside: the interior block, and per node its
-/// lapped solid texture where the scene asks for one (`[node.interior.lst]`,
-/// laid as the bake lays it, the block as exemplar).
 /// Voxels a side of the block a morphed interior is sampled into for the
 /// cut plane (128^3 points: about 0.4 s on 2 cores).
 const MORPH_VOXELS: usize = 128;
@@ -94,6 +94,8 @@ impl Viewer {
                 Err(e) => return self.error(e),
             };
         self.block_placement = Some(placement);
+        // Kept for the carving, which colours on the CPU.
+        self.interior_block = Some((volume.clone(), placement));
         if let Some(scene) = &mut self.scene
             && let Err(e) = scene.set_block(
                 &self.renderer,
@@ -119,7 +121,15 @@ impl Viewer {
         self.cut.on = on;
         self.cut_made = None;
         self.touch();
-        if !on || self.has_block() || self.jobs.block.is_some() {
+        if on {
+            self.start_interior();
+        }
+    }
+
+    /// Synthesise the interior (block and lapped solid textures) unless it
+    /// is there or on its way: the cut plane and the carving show it.
+    pub(super) fn start_interior(&mut self) {
+        if self.has_block() || self.jobs.block.is_some() {
             return;
         }
         let Some(doc) = &self.doc else { return };
@@ -236,7 +246,7 @@ impl Viewer {
                             name,
                             p,
                         )?;
-                        Ok(Some(model))
+                        Ok(Some(model.into()))
                     })
                     .collect::<Result<_>>()?;
                 Ok(Interiors {

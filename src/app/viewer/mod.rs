@@ -17,6 +17,7 @@ use std::time::Instant;
 use eframe::{egui, egui_wgpu};
 use glam::DVec3;
 
+mod carve;
 mod cut_plane;
 mod scene_view;
 mod screenshot;
@@ -25,6 +26,7 @@ mod side_panel;
 mod texture;
 mod top_bar;
 
+pub use carve::CarveTool;
 pub use cut_plane::CutPlane;
 
 use super::document::Document;
@@ -52,6 +54,9 @@ pub struct Options {
     /// Drag the selected facet's texture a little every frame (to time
     /// the drag path).
     pub drag: bool,
+    /// Before the screenshot: look at the organ from outside, turn to the
+    /// Carve tool and carve a pit under the view's centre, a step a frame.
+    pub carve: bool,
 }
 
 /// What the mouse does in the scene.
@@ -62,6 +67,8 @@ pub enum Mode {
     /// Drag moves the selected facet's texture, shift-drag turns it, the
     /// wheel scales it.
     Texture,
+    /// Drag over the organ removes the tets under a sphere (`carve`).
+    Carve,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -118,9 +125,14 @@ pub struct Viewer {
     pub cut: CutPlane,
     /// Per node, its lapped solid texture (cuts through it are coloured
     /// by the LST shader, not the block).
-    lst: Vec<Option<crate::solid::lst::LstModel>>,
+    lst: Vec<Option<std::sync::Arc<crate::solid::lst::LstModel>>>,
     /// Where the interior block was placed when it went to the GPU.
     block_placement: Option<Placement>,
+    /// That block on the CPU, with its placement (the carving colours
+    /// from it).
+    interior_block: Option<(crate::synth::volume::Volume, Placement)>,
+    /// The Carve tool's state (`carve`).
+    pub carve: CarveTool,
     /// Where the 3D view was last drawn, in points (the texture dial turns
     /// about its centre).
     view_rect: Option<egui::Rect>,
@@ -137,6 +149,8 @@ pub struct Viewer {
     generation: u64,
     opts: Options,
     frames_left: Option<usize>,
+    /// `--carve`: the scripted carving has begun.
+    carve_script: bool,
     screenshot_result: ScreenshotSlot,
     pub frame_times: Vec<f64>,
     last_frame: Option<Instant>,
@@ -178,6 +192,8 @@ impl Viewer {
             },
             lst: Vec::new(),
             block_placement: None,
+            interior_block: None,
+            carve: CarveTool::default(),
             view_rect: None,
             cut_made: None,
             message: None,
@@ -187,6 +203,7 @@ impl Viewer {
             jobs: Jobs::default(),
             generation: 0,
             frames_left: opts.screenshot.as_ref().map(|_| opts.frames.max(1)),
+            carve_script: false,
             opts: opts.clone(),
             screenshot_result: Arc::new(Mutex::new(None)),
             frame_times: Vec::new(),
@@ -205,7 +222,7 @@ impl Viewer {
 
     /// Whether any job is running.
     pub fn busy(&self) -> bool {
-        !self.jobs.shown().is_empty() || self.jobs.thumbnails.is_some()
+        !self.jobs.shown().is_empty() || self.jobs.thumbnails.is_some() || self.carve.busy()
     }
 
     pub fn adapter(&self) -> &str {
@@ -313,6 +330,11 @@ impl Viewer {
                     self.scene = None;
                     self.lst.clear();
                     self.cut.on = false;
+                    self.interior_block = None;
+                    self.carve = CarveTool::default();
+                    if self.mode == Mode::Carve {
+                        self.mode = Mode::Camera;
+                    }
                     self.message = None;
                     self.rebuild_list();
                     self.jobs.thumbnails = Some(Job::spawn("thumbnails", self.wake(), move |_| {
@@ -431,6 +453,10 @@ impl eframe::App for Viewer {
             self.error(e);
         }
         self.poll_jobs();
+        self.poll_carving();
+        if self.mode == Mode::Carve {
+            self.ensure_carving();
+        }
         self.update_section();
         self.screenshot_step(&ctx);
         if let Some(dialog) = &mut self.dialog {

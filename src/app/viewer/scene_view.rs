@@ -99,6 +99,10 @@ impl Viewer {
                 .on_hover_text(
                     "drag: move · shift-drag: turn · wheel: scale the selected facet's texture",
                 );
+            ui.radio_value(&mut self.mode, Mode::Carve, "Carve").on_hover_text(
+                "drag over the organ: a sphere (radius in the side panel) removes the tets under it, \
+                 as a simulator's burr does · right/middle drag: pan · wheel: zoom",
+            );
             if ui
                 .button("Reset view")
                 .on_hover_text("back to the scene's first camera (key: Home)")
@@ -127,6 +131,20 @@ impl Viewer {
         let delta = response.drag_delta();
         let d = (delta.x as f64, delta.y as f64);
         let height = avail.y as f64;
+        let carving = self.mode == Mode::Carve && !(ctrl && self.cut.on);
+        if carving
+            && (response.dragged_by(egui::PointerButton::Primary) || response.clicked())
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            // Each frame of the drag, the sphere under the pointer.
+            let r = response.rect;
+            let x = ((pos.x - r.left()) / r.width()) as f64 * 2.0 - 1.0;
+            let y = 1.0 - ((pos.y - r.top()) / r.height()) as f64 * 2.0;
+            self.carve_at(x, y, (r.width() / r.height().max(1.0)) as f64);
+        }
+        if response.drag_stopped() || response.clicked() {
+            self.carve.release();
+        }
         if response.dragged() && delta != egui::Vec2::ZERO {
             if ctrl && self.cut.on {
                 let (n, _) = self.cut_plane().unwrap_or((DVec3::X, 0.0));
@@ -150,6 +168,8 @@ impl Viewer {
                         s.offset[1] += d.1 * k / s.tile_size;
                     });
                 }
+            } else if carving && response.dragged_by(egui::PointerButton::Primary) {
+                // Carved above.
             } else if response.dragged_by(egui::PointerButton::Primary) {
                 self.camera.orbit(d.0 * 0.01, d.1 * 0.01);
             } else {

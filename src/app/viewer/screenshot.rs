@@ -1,5 +1,6 @@
 //! `--screenshot OUT.png --frames N`: count frames once loading is done,
-//! time them, save the window and close.
+//! time them, save the window and close; with `--drag` a texture is
+//! dragged meanwhile, with `--carve` the organ carved.
 
 use std::time::Instant;
 
@@ -35,9 +36,34 @@ impl Viewer {
             self.frame_times.clear();
             return;
         }
+        if self.opts.carve && !self.carve.ready() {
+            if !self.carve_script {
+                // Outside the organ, the Carve tool on: its interior and
+                // tets are made over the next frames (busy meanwhile).
+                self.carve_script = true;
+                if let Some(doc) = &self.doc
+                    && let Some((lo, hi)) = doc.bounds()
+                {
+                    self.camera = crate::render::OrbitCamera::fit(lo, hi);
+                }
+                self.mode = super::Mode::Carve;
+                self.frame_times.clear();
+                return;
+            }
+            // It failed (the message says why): the screenshot shows that.
+        }
         if self.opts.drag && left > 1 {
             self.edit_texture(|s| s.offset[0] += 0.002);
             self.interacting = true;
+        }
+        if self.opts.carve && self.carve.ready() && left > 1 {
+            // A pit under the view's centre: the sphere circles a little,
+            // a step each frame.
+            let a = left as f64 * 0.7;
+            let aspect = self
+                .view_rect
+                .map_or(1.6, |r| (r.width() / r.height().max(1.0)) as f64);
+            self.carve_at(0.06 * a.cos(), 0.06 * a.sin(), aspect);
         }
         // Every frame drawn anew, so frame times are those of real frames.
         self.touch();

@@ -50,5 +50,6 @@ impl Viewer {
             self.touch();
         }
         self.cut_plane_panel(ui);
+        self.carve_panel(ui);
     }
 }

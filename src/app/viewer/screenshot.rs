@@ -36,21 +36,21 @@ impl Viewer {
             self.frame_times.clear();
             return;
         }
-        if self.opts.carve && !self.carve.ready() {
-            if !self.carve_script {
-                // Outside the organ, the Carve tool on: its interior and
-                // tets are made over the next frames (busy meanwhile).
-                self.carve_script = true;
-                if let Some(doc) = &self.doc
-                    && let Some((lo, hi)) = doc.bounds()
-                {
-                    self.camera = crate::render::OrbitCamera::fit(lo, hi);
-                }
-                self.mode = super::Mode::Carve;
-                self.frame_times.clear();
-                return;
+        // Outside the organ, the Carve tool on: its interior and tets are
+        // made over the next frames (busy meanwhile). Should that fail, the
+        // message says why and the screenshot shows it.
+        if self.opts.carve && !self.carve.ready() && !self.carve_script {
+            self.carve_script = true;
+            if let Some(doc) = &self.doc
+                && let Some((lo, hi)) = doc.bounds()
+            {
+                // Turned a little, so the pit's walls show.
+                self.camera = crate::render::OrbitCamera::fit(lo, hi);
+                self.camera.orbit(0.5, 0.35);
             }
-            // It failed (the message says why): the screenshot shows that.
+            self.mode = super::Mode::Carve;
+            self.frame_times.clear();
+            return;
         }
         if self.opts.drag && left > 1 {
             self.edit_texture(|s| s.offset[0] += 0.002);
@@ -63,7 +63,7 @@ impl Viewer {
             let aspect = self
                 .view_rect
                 .map_or(1.6, |r| (r.width() / r.height().max(1.0)) as f64);
-            self.carve_at(0.06 * a.cos(), 0.06 * a.sin(), aspect);
+            self.carve_at(0.08 * a.cos(), 0.08 * a.sin(), aspect);
         }
         // Every frame drawn anew, so frame times are those of real frames.
         self.touch();

@@ -60,7 +60,15 @@ rm -rf "$bake"
 mv "$gl_out/out" "$bake"
 rm -rf "$gl_out"
 
-step "tools/fuzz.sh --smoke (every parser's fuzz target, 10,000 inputs each)"
+step "the viewer's Carve tool in a real window under Xvfb (a pit carved from outside, steps timed)"
+need_apt xvfb xauth
+carve_log="$(xvfb-run -a -s "-screen 0 1280x800x24" target/release/organtex view scenes/myoma_cuts.toml \
+    --screenshot target/carve-check.png --frames 20 --carve)"
+echo "$carve_log"
+echo "$carve_log" | grep -Eq '^carving: [1-9][0-9]* steps, [1-9][0-9]* tets removed'
+test -s target/carve-check.png
+
+step "tools/fuzz.sh --smoke (every parser's fuzz target and the carving session, 10,000 inputs each)"
 command -v g++ >/dev/null 2>&1 || need_apt g++
 tools/fuzz.sh --smoke
 

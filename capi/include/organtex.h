@@ -269,7 +269,7 @@ enum organtex_status organtex_carving_new(const struct organtex_node *node,
                                           const struct organtex_carving_options *options,
                                           struct organtex_carving **out);
 
-// Free a carving session (NULL is fine); waits for its background job.
+// Free a carving session (NULL is fine); stops its background job.
 void organtex_carving_free(struct organtex_carving *carving);
 
 // Remove exactly the tets `ids` (SOFA's TetrahedraRemoved). Refuses,

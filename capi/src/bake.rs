@@ -200,8 +200,8 @@ pub extern "C" fn organtex_node_boundary(
             let mut f = Vec::new();
             let mut i = Vec::new();
             for (t, tet) in mesh.tets.iter().enumerate() {
-                for k in 0..4 {
-                    if adjacency[t][k] == organtex::tetra::mesh::NO_NEIGHBOUR {
+                for (k, &n) in adjacency[t].iter().enumerate() {
+                    if n == organtex::tetra::mesh::NO_NEIGHBOUR {
                         f.push(organtex::tetra::mesh::TET_FACES[k].map(|c| tet[c]));
                         i.push(4 * t as u32 + k as u32);
                     }

@@ -100,25 +100,8 @@ impl organtex_carving {
                 id: f.id,
                 vertices: f.vertices,
                 page: f.page,
-                uvs: [
-                    f.uvs[0][0],
-                    f.uvs[0][1],
-                    f.uvs[1][0],
-                    f.uvs[1][1],
-                    f.uvs[2][0],
-                    f.uvs[2][1],
-                ],
-                colours: [
-                    f.colours[0][0],
-                    f.colours[0][1],
-                    f.colours[0][2],
-                    f.colours[1][0],
-                    f.colours[1][1],
-                    f.colours[1][2],
-                    f.colours[2][0],
-                    f.colours[2][1],
-                    f.colours[2][2],
-                ],
+                uvs: std::array::from_fn(|i| f.uvs[i / 2][i % 2]),
+                colours: std::array::from_fn(|i| f.colours[i / 3][i % 3]),
             })
             .collect();
         self.vanished = step

@@ -18,6 +18,11 @@
 //!   free.
 
 #![allow(non_camel_case_types)]
+// The functions are C's, called through the header's contract: every
+// pointer is checked for NULL before use and taken as the header says
+// (from this library, or valid for the count given). Rust callers use
+// `organtex::runtime`, not these.
+#![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 mod bake;
 mod carving;
@@ -125,10 +130,11 @@ pub(crate) fn arg_mut<'a, T>(ptr: *mut T, name: &str) -> Result<&'a mut T, Failu
         .ok_or_else(|| Failure(ORGANTEX_NULL_ARGUMENT, format!("{name} is NULL")))
 }
 
-/// `count` values at `ptr`; NULL is allowed for an empty array.
-pub(crate) fn slice<'a, T>(ptr: *const T, count: usize, name: &str) -> Result<&'a [T], Failure> {
+/// Whether `count` values of `T` may lie at `ptr`: none, or a pointer
+/// that is not NULL and a count that fits memory.
+fn check_array<T>(ptr: *const T, count: usize, name: &str) -> Result<bool, Failure> {
     if count == 0 {
-        return Ok(&[]);
+        return Ok(false);
     }
     if ptr.is_null() {
         return Err(Failure(
@@ -138,6 +144,14 @@ pub(crate) fn slice<'a, T>(ptr: *const T, count: usize, name: &str) -> Result<&'
     }
     if count > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return Err(invalid(format!("{name}: a count of {count} is impossible")));
+    }
+    Ok(true)
+}
+
+/// `count` values at `ptr`; NULL is allowed for an empty array.
+pub(crate) fn slice<'a, T>(ptr: *const T, count: usize, name: &str) -> Result<&'a [T], Failure> {
+    if !check_array(ptr, count, name)? {
+        return Ok(&[]);
     }
     // SAFETY: the caller passes `count` readable values at `ptr`.
     Ok(unsafe { std::slice::from_raw_parts(ptr, count) })
@@ -149,17 +163,8 @@ pub(crate) fn slice_mut<'a, T>(
     count: usize,
     name: &str,
 ) -> Result<&'a mut [T], Failure> {
-    if count == 0 {
+    if !check_array(ptr, count, name)? {
         return Ok(&mut []);
-    }
-    if ptr.is_null() {
-        return Err(Failure(
-            ORGANTEX_NULL_ARGUMENT,
-            format!("{name} is NULL with a count of {count}"),
-        ));
-    }
-    if count > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
-        return Err(invalid(format!("{name}: a count of {count} is impossible")));
     }
     // SAFETY: the caller passes `count` writable values at `ptr`.
     Ok(unsafe { std::slice::from_raw_parts_mut(ptr, count) })

@@ -3,6 +3,12 @@
 //! layout). Assembled from (row, col, value) entries, factored by faer's
 //! supernodal sparse Cholesky; the choice of solver stays in this file.
 //!
+//! Assembly goes straight into faer's triplets rather than through sprs
+//! (which DESIGN.md names for assembly): faer both assembles and factors,
+//! so sprs would only add a conversion of every matrix between the two
+//! crates' layouts and a second sparse dependency, for no operation faer
+//! lacks.
+//!
 //! A `SpdPattern` fixes the sparsity once (ordering and symbolic
 //! factorisation included), so Newton iterations only refill values.
 //! Factorisation runs single-threaded: a parallel supernodal sum may round

@@ -3,15 +3,6 @@
 // solid/lst/sample.wgsl, both prepended to this file), lit like the
 // facets.
 
-struct Globals {
-    view_proj: mat4x4<f32>,
-    eye: vec4<f32>,
-    clip: vec4<f32>,
-    flags: vec4<f32>,
-}
-
-@group(0) @binding(0) var<uniform> globals: Globals;
-
 struct CutIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
@@ -38,17 +29,9 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
 }
 
-// The headlamp's light on a cut at `world` facing `normal`.
-fn cut_light(world: vec3<f32>, normal: vec3<f32>) -> f32 {
-    let to_eye = globals.eye.xyz - world;
-    let d = length(to_eye);
-    let falloff = 1.0 / (1.0 + pow(d / (1.5 * globals.eye.w), 2.0));
-    return (0.15 + 0.85 * abs(dot(normalize(normal), to_eye / max(d, 1e-20)))) * (0.4 + 1.2 * falloff);
-}
-
 @fragment
 fn fs_cut(in: CutOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(srgb_to_linear(block_colour(in.world)) * cut_light(in.world, in.normal), 1.0);
+    return vec4<f32>(srgb_to_linear(block_colour(in.world)) * headlamp(normalize(in.normal), in.world), 1.0);
 }
 
 // Cuts through a lapped solid texture (sample.wgsl of solid::lst): each
@@ -86,5 +69,5 @@ fn vs_lst_cut(v: LstCutIn) -> LstCutOut {
 @fragment
 fn fs_lst_cut(in: LstCutOut) -> @location(0) vec4<f32> {
     let c = lst_colour(in.slot, in.bary, in.depth);
-    return vec4<f32>(srgb_to_linear(c) * cut_light(in.world, in.normal), 1.0);
+    return vec4<f32>(srgb_to_linear(c) * headlamp(normalize(in.normal), in.world), 1.0);
 }

@@ -1,20 +1,9 @@
 // Textured facets, as the .glb draws them (scene::draw): the tissue
 // texture through the material's texture transform (KHR_texture_transform),
 // tangent-space bump from the normal map, blend weight per vertex, lit by
-// a light at the eye as an endoscope lights what it sees (as the bake's
-// software preview did). Also the distortion heat map and the wireframe
+// a light at the eye as an endoscope lights what it sees (frame.wgsl's
+// headlamp, prepended with the globals). Also the distortion heat map and the wireframe
 // and seam lines, from the same vertices.
-
-struct Globals {
-    view_proj: mat4x4<f32>,
-    // xyz: the eye; w: a typical depth, for the light's falloff.
-    eye: vec4<f32>,
-    // xyz: the cut plane's normal, w: its offset; points with
-    // dot(n, p) > w are cut away. A zero normal cuts nothing.
-    clip: vec4<f32>,
-    // x: bump on (1) or off (0); y: heat map (1) or texture (0).
-    flags: vec4<f32>,
-}
 
 struct Material {
     // The texture transform as two rows of a 2x3 matrix.
@@ -25,7 +14,6 @@ struct Material {
     normal: vec4<f32>,
 }
 
-@group(0) @binding(0) var<uniform> globals: Globals;
 @group(1) @binding(0) var<uniform> material: Material;
 @group(1) @binding(1) var colour_texture: texture_2d<f32>;
 @group(1) @binding(2) var colour_sampler: sampler;
@@ -83,10 +71,6 @@ fn vs_main(v: VertexIn) -> VertexOut {
     return vertex(v);
 }
 
-fn clipped(p: vec3<f32>) -> bool {
-    return dot(globals.clip.xyz, globals.clip.xyz) > 0.0 && dot(globals.clip.xyz, p) > globals.clip.w;
-}
-
 fn carved(p: vec3<f32>) -> bool {
     if carve.flags.x < 0.5 {
         return false;
@@ -100,14 +84,6 @@ fn carved(p: vec3<f32>) -> bool {
 
 fn hidden(p: vec3<f32>) -> bool {
     return clipped(p) || carved(p);
-}
-
-// Light at the eye, two-sided, fading with distance.
-fn lit(n: vec3<f32>, p: vec3<f32>) -> f32 {
-    let to_eye = globals.eye.xyz - p;
-    let d = length(to_eye);
-    let falloff = 1.0 / (1.0 + pow(d / (1.5 * globals.eye.w), 2.0));
-    return (0.15 + 0.85 * abs(dot(n, to_eye / max(d, 1e-20)))) * (0.4 + 1.2 * falloff);
 }
 
 // Blue (texture squeezed) through white to red (stretched), saturating at
@@ -134,10 +110,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         n = normalize(t * m_scaled.x + b * m_scaled.y + n * m_scaled.z);
     }
     if globals.flags.y > 0.5 {
-        return vec4<f32>(heat_colour(in.heat) * lit(n, in.world), 1.0);
+        return vec4<f32>(heat_colour(in.heat) * headlamp(n, in.world), 1.0);
     }
     let c = textureSample(colour_texture, colour_sampler, in.uv) * material.factor;
-    return vec4<f32>(c.rgb * lit(n, in.world), c.a * in.alpha);
+    return vec4<f32>(c.rgb * headlamp(n, in.world), c.a * in.alpha);
 }
 
 // Lines sit a little towards the eye so the faces they border do not hide

@@ -119,19 +119,20 @@ fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
     })
 }
 
-/// Facet, cut and carved-face shader sources. The cut shader includes the
+/// Facet, cut and carved-face shader sources, each after `frame.wgsl`. The cut shader includes the
 /// block and LST samplers the library ships for simulators, so both draw
 /// cuts the same way.
 pub(crate) fn shader_sources() -> [String; 3] {
+    let frame = include_str!("frame.wgsl");
     [
-        include_str!("facet.wgsl").to_string(),
+        format!("{frame}\n{}", include_str!("facet.wgsl")),
         format!(
-            "{}\n{}\n{}",
+            "{frame}\n{}\n{}\n{}",
             crate::solid::SAMPLE_BLOCK_WGSL,
             crate::solid::lst::gpu::sample_lst_wgsl(),
             include_str!("cut.wgsl")
         ),
-        include_str!("carved.wgsl").to_string(),
+        format!("{frame}\n{}", include_str!("carved.wgsl")),
     ]
 }
 

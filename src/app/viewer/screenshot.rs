@@ -44,9 +44,10 @@ impl Viewer {
             if let Some(doc) = &self.doc
                 && let Some((lo, hi)) = doc.bounds()
             {
-                // Turned a little, so the pit's walls show.
+                // Turned a little and nearer, so the pit's walls show.
                 self.camera = crate::render::OrbitCamera::fit(lo, hi);
                 self.camera.orbit(0.5, 0.35);
+                self.camera.zoom(0.6);
             }
             self.mode = super::Mode::Carve;
             self.frame_times.clear();
@@ -57,13 +58,14 @@ impl Viewer {
             self.interacting = true;
         }
         if self.opts.carve && self.carve.ready() && left > 1 {
-            // A pit under the view's centre: the sphere circles a little,
-            // a step each frame.
+            // A bowl under the view's centre: the sphere spirals out from
+            // it and back, a step each frame, deeper each round.
             let a = left as f64 * 0.7;
+            let r = 0.09 * ((left % 24) as f64 / 12.0 - 1.0).abs();
             let aspect = self
                 .view_rect
                 .map_or(1.6, |r| (r.width() / r.height().max(1.0)) as f64);
-            self.carve_at(0.08 * a.cos(), 0.08 * a.sin(), aspect);
+            self.carve_at(r * a.cos(), r * a.sin(), aspect);
         }
         // Every frame drawn anew, so frame times are those of real frames.
         self.touch();

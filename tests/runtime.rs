@@ -658,3 +658,112 @@ fn bad_bakes_and_nodes_are_named() {
     let c = node.colours(&[DVec3::new(18.5, 0.0, 20.0)]).unwrap();
     assert_eq!(c, node.model().colours(&[DVec3::new(18.5, 0.0, 20.0)]));
 }
+
+/// A small scene baked with `interior`, its box a 12-face cube of MRI
+/// coordinates (tests/data/morph/box.obj).
+fn bake_box(dir: &Path, interior: &str) -> PathBuf {
+    let data = root().join("tests/data/morph");
+    let scene = dir.join("box.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"
+database = "{db}"
+[[node]]
+name = "brain"
+mesh = {{ file = "{mesh}" }}
+[[node.facet]]
+name = "*"
+texture = "fundus-tissue"
+tile_size = 40.0
+[node.interior]
+texture = "fundus-tissue"
+{interior}
+[bake]
+interior_voxels = 16
+"#,
+            db = root().join("database").display(),
+            mesh = data.join("box.obj").display(),
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    organtex::bake::bake(&scene, &out, &Default::default(), &Silent).unwrap();
+    out
+}
+
+/// Through a bake on disk: a morph's node colours points as the morph
+/// itself does (the bake writes the surface it needs beside the
+/// sections); a block's node gives 3D texture coordinates that sample the
+/// block to the colours it reports, and its tet mesh carves.
+#[test]
+fn a_bake_opens_morph_and_block_nodes_as_the_models_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let sections = root().join("tests/data/morph/sections.toml");
+    let out = bake_box(
+        &dir.path().join("morph"),
+        &format!("method = \"morph\"\nsections = \"{}\"", sections.display()),
+    );
+    let node = Bake::open(&out).unwrap().node("brain").unwrap();
+    assert!(matches!(node.model(), Model::Morph(_)));
+    assert!(node.tet_mesh().is_none());
+    let surface = organtex::mesh::io::read(&root().join("tests/data/morph/box.obj")).unwrap();
+    let topology = organtex::mesh::Topology::build(&surface).unwrap();
+    let morph = organtex::solid::morph::Morph::read(
+        &surface,
+        &topology,
+        &sections,
+        Default::default(),
+        &Silent,
+    )
+    .unwrap();
+    let (lo, hi) = surface.bounding_box().unwrap();
+    let points: Vec<DVec3> = (0..500)
+        .map(|i| {
+            let f = |k: u64| organtex::rng::unit(9, &[i, k]);
+            lo + (hi - lo) * DVec3::new(f(0), f(1), f(2))
+        })
+        .collect();
+    let ours = node.colours(&points).unwrap();
+    let theirs = morph.colours(&points);
+    let worst = ours
+        .iter()
+        .zip(&theirs)
+        .flat_map(|(a, b)| (0..3).map(move |k| a[k].abs_diff(b[k])))
+        .max()
+        .unwrap();
+    assert!(worst <= 1, "the baked morph colours differ by {worst}/255");
+    let e = Carving::new(node, CarvingOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("no tet mesh"), "{e}");
+
+    let out = bake_box(&dir.path().join("block"), "tet_mesh = true");
+    let node = Bake::open(&out).unwrap().node("brain").unwrap();
+    let Some((volume, placement)) = node.model().block() else {
+        panic!("a block node");
+    };
+    let coords = node.block_coordinates(&points).unwrap();
+    let colours = node.colours(&points).unwrap();
+    for (c, want) in coords.iter().zip(&colours) {
+        let got = volume
+            .sample([c[0] as f64, c[1] as f64, c[2] as f64])
+            .map(|x| x.round() as u8);
+        let d = (0..3).map(|k| got[k].abs_diff(want[k])).max().unwrap();
+        assert!(d <= 1, "{got:?} {want:?}");
+    }
+    assert!(placement.scale > 0.0 && placement.origin == DVec3::ZERO);
+    let mesh = node.tet_mesh().expect("tet_mesh = true");
+    let mut c = Carving::new(node.clone(), CarvingOptions::default()).unwrap();
+    let centre = (lo + hi) / 2.0;
+    let step = c
+        .carve(&Tool::Sphere {
+            centre,
+            radius: (hi - lo).min_element() * 0.2,
+        })
+        .unwrap();
+    assert!(!step.removed.is_empty() && !step.appeared.is_empty());
+    assert!(mesh.num_tets() > step.removed.len());
+    check_texels(&c, &step, "block bake");
+}

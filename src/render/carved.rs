@@ -8,7 +8,6 @@ use std::collections::HashMap;
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
-use super::gpu_scene::GpuScene;
 use super::pipelines::{CARVED_FLOATS, Renderer};
 
 /// The carved space over a box: one byte a voxel (255 carved, 0 not), x
@@ -41,9 +40,10 @@ struct Mask {
     bind_group: wgpu::BindGroup,
 }
 
-/// The carving's GPU resources, part of a `GpuScene`.
+/// The carving's GPU resources, part of a `GpuScene`
+/// (`GpuScene::carved_mut`).
 #[derive(Default)]
-pub(super) struct GpuCarved {
+pub struct GpuCarved {
     pages: HashMap<u32, Page>,
     /// Per page its faces' vertices and count.
     faces: Vec<(u32, wgpu::Buffer, u32)>,
@@ -94,11 +94,11 @@ fn write_texels(
     );
 }
 
-impl GpuScene {
+impl GpuCarved {
     /// Upload atlas page `page` (`side` x `side` RGBA texels): whole when
     /// it is new, else only the rectangle `dirty` (x, y, width, height).
     #[allow(clippy::too_many_arguments)]
-    pub fn set_carved_page(
+    pub fn set_page(
         &mut self,
         renderer: &Renderer,
         device: &wgpu::Device,
@@ -108,7 +108,7 @@ impl GpuScene {
         rgba: &[u8],
         dirty: [u32; 4],
     ) {
-        let fresh = self.carved.pages.get(&page).is_none_or(|p| p.side != side);
+        let fresh = self.pages.get(&page).is_none_or(|p| p.side != side);
         if fresh {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("carved page"),
@@ -127,7 +127,7 @@ impl GpuScene {
             let bind_group =
                 renderer.page_bind_group(device, &texture.create_view(&Default::default()));
             write_texels(queue, &texture, rgba, side, [0, 0, side, side]);
-            self.carved.pages.insert(
+            self.pages.insert(
                 page,
                 Page {
                     texture,
@@ -135,18 +135,18 @@ impl GpuScene {
                     bind_group,
                 },
             );
-        } else if let Some(p) = self.carved.pages.get(&page) {
+        } else if let Some(p) = self.pages.get(&page) {
             write_texels(queue, &p.texture, rgba, side, dirty);
         }
     }
 
     /// Forget a released page.
-    pub fn drop_carved_page(&mut self, page: u32) {
-        self.carved.pages.remove(&page);
+    pub fn drop_page(&mut self, page: u32) {
+        self.pages.remove(&page);
     }
 
     /// The carved faces to draw (replacing the last set).
-    pub fn set_carved_faces(&mut self, device: &wgpu::Device, faces: &[CarvedFace]) {
+    pub fn set_faces(&mut self, device: &wgpu::Device, faces: &[CarvedFace]) {
         let mut by_page: HashMap<u32, Vec<f32>> = HashMap::new();
         for f in faces {
             let [a, b, c] = f.corners;
@@ -159,7 +159,7 @@ impl GpuScene {
         }
         let mut pages: Vec<u32> = by_page.keys().copied().collect();
         pages.sort_unstable();
-        self.carved.faces = pages
+        self.faces = pages
             .into_iter()
             .map(|page| {
                 let v = &by_page[&page];
@@ -174,14 +174,14 @@ impl GpuScene {
     }
 
     /// Triangles of carved faces drawn.
-    pub fn carved_triangles(&self) -> usize {
-        self.carved.faces.iter().map(|f| f.2 as usize / 3).sum()
+    pub fn triangles(&self) -> usize {
+        self.faces.iter().map(|f| f.2 as usize / 3).sum()
     }
 
     /// The carved space (None: nothing carved). Uploads the whole mask when
     /// it is new or its size changed, else only the voxels of `region`
     /// (low and high corner, inclusive).
-    pub fn set_carve_mask(
+    pub fn set_mask(
         &mut self,
         renderer: &Renderer,
         device: &wgpu::Device,
@@ -190,14 +190,10 @@ impl GpuScene {
         region: Option<([u32; 3], [u32; 3])>,
     ) {
         let Some(m) = mask else {
-            self.carved.mask = None;
+            self.mask = None;
             return;
         };
-        let fresh = self
-            .carved
-            .mask
-            .as_ref()
-            .is_none_or(|old| old.size != m.size);
+        let fresh = self.mask.as_ref().is_none_or(|old| old.size != m.size);
         if fresh {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("carve mask"),
@@ -219,7 +215,7 @@ impl GpuScene {
                 &texture.create_view(&Default::default()),
                 [o.x, o.y, o.z, m.voxel as f32],
             );
-            self.carved.mask = Some(Mask {
+            self.mask = Some(Mask {
                 texture,
                 size: m.size,
                 bind_group,
@@ -229,7 +225,7 @@ impl GpuScene {
             Some(r) if !fresh => r,
             _ => ([0; 3], m.size.map(|s| s - 1)),
         };
-        let target = &self.carved.mask.as_ref().expect("set above").texture;
+        let target = &self.mask.as_ref().expect("set above").texture;
         let [w, h, _] = m.size;
         queue.write_texture(
             wgpu::TexelCopyTextureInfo {
@@ -257,7 +253,7 @@ impl GpuScene {
     }
 
     /// Forget the carving: no faces, no pages, no mask.
-    pub fn clear_carving(&mut self) {
-        self.carved = GpuCarved::default();
+    pub fn clear(&mut self) {
+        *self = GpuCarved::default();
     }
 }

@@ -547,6 +547,16 @@ impl GpuScene {
         Ok(())
     }
 
+    /// What a carving exposed, to update.
+    pub fn carved_mut(&mut self) -> &mut super::carved::GpuCarved {
+        &mut self.carved
+    }
+
+    /// Triangles of carved faces drawn.
+    pub fn carved_triangles(&self) -> usize {
+        self.carved.triangles()
+    }
+
     /// Take over `old`'s interior block and carving (a scene rebuilt
     /// keeps them).
     pub fn keep_block(&mut self, old: GpuScene) {

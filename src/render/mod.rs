@@ -21,7 +21,7 @@ mod pipelines;
 mod preview;
 
 pub use camera::OrbitCamera;
-pub use carved::{CarveMask, CarvedFace};
+pub use carved::{CarveMask, CarvedFace, GpuCarved};
 pub use frame::{Layers, View};
 pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};

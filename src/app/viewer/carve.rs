@@ -267,7 +267,7 @@ impl Viewer {
         self.carve.step_times.clear();
         self.carve.last_hit = None;
         if let Some(scene) = &mut self.scene {
-            scene.clear_carving();
+            scene.carved_mut().clear();
         }
         if let Some(node) = node
             && let Err(e) = self.start_session(node)
@@ -426,11 +426,12 @@ impl Viewer {
                 self.carve.steps += 1;
                 self.carve.step_times.push(step.seconds);
                 if let Some(scene) = &mut self.scene {
+                    let scene = scene.carved_mut();
                     let atlas = session.carving.atlas();
                     let side = atlas.options().page_size;
                     for &(page, r) in &step.dirty {
                         if let Some(rgba) = atlas.page(page) {
-                            scene.set_carved_page(
+                            scene.set_page(
                                 &self.renderer,
                                 &self.gpu.device,
                                 &self.gpu.queue,
@@ -442,7 +443,7 @@ impl Viewer {
                         }
                     }
                     for &page in &step.released {
-                        scene.drop_carved_page(page);
+                        scene.drop_page(page);
                     }
                     let faces: Vec<CarvedFace> = session
                         .carved
@@ -453,9 +454,9 @@ impl Viewer {
                             uvs,
                         })
                         .collect();
-                    scene.set_carved_faces(&self.gpu.device, &faces);
+                    scene.set_faces(&self.gpu.device, &faces);
                     if region.is_some() {
-                        scene.set_carve_mask(
+                        scene.set_mask(
                             &self.renderer,
                             &self.gpu.device,
                             &self.gpu.queue,

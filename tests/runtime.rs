@@ -663,6 +663,7 @@ fn bad_bakes_and_nodes_are_named() {
 /// coordinates (tests/data/morph/box.obj).
 fn bake_box(dir: &Path, interior: &str) -> PathBuf {
     let data = root().join("tests/data/morph");
+    std::fs::create_dir_all(dir).unwrap();
     let scene = dir.join("box.toml");
     std::fs::write(
         &scene,

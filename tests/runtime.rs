@@ -356,8 +356,16 @@ fn a_step_changes_nothing_when_refused_and_the_session_goes_on() {
     // Still usable.
     let step = c.remove(&[7, 8]).unwrap();
     assert_eq!(step.removed, [7, 8]);
-    // Bad atlas options.
-    for (t, p) in [(0.0, 1024), (-3.0, 1024), (f64::NAN, 1024), (8.0, 8)] {
+    // Bad atlas options, and pages too small for the mesh's faces.
+    let longest = node.longest_edge().unwrap();
+    assert!(longest > 0.0);
+    for (t, p) in [
+        (0.0, 1024),
+        (-3.0, 1024),
+        (f64::NAN, 1024),
+        (8.0, 8),
+        (64.0 / longest, 64),
+    ] {
         let o = CarvingOptions {
             atlas: AtlasOptions {
                 texels_per_unit: t,

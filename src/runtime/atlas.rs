@@ -183,6 +183,21 @@ impl CutAtlas {
         self.options
     }
 
+    /// Refuse options under which a face with edges up to `longest` units
+    /// would not fit a page (its chart is at most that many texels wide and
+    /// high, with the border): checked once, so no step fails half done.
+    pub fn check_fits(&self, longest: f64) -> Result<()> {
+        let side = self.options.page_size;
+        let needed = (longest * self.options.texels_per_unit + 2.0 * PAD).ceil();
+        if !(needed.is_finite() && needed + QUANTUM as f64 <= side as f64) {
+            return Err(Error::invalid(format!(
+                "the atlas's pages of {side} texels cannot hold a face {longest:.3} units long at                  {} texels a unit ({needed} texels): raise the page size or lower the density",
+                self.options.texels_per_unit
+            )));
+        }
+        Ok(())
+    }
+
     /// The face (a, b, c) laid flat in texels: its longest edge along +x
     /// from the origin, the third corner below it (y down keeps the
     /// winding seen from the face's front counter-clockwise on screen

@@ -125,6 +125,8 @@ pub struct Node {
     adjacency: OnceLock<Vec<[u32; 4]>>,
     /// The tets' centroids binned, for tools.
     centroids: OnceLock<CentroidGrid>,
+    /// The tet mesh's longest edge.
+    longest_edge: OnceLock<f64>,
 }
 
 impl Node {
@@ -180,6 +182,7 @@ impl Node {
             tets,
             adjacency: OnceLock::new(),
             centroids: OnceLock::new(),
+            longest_edge: OnceLock::new(),
         })
     }
 
@@ -193,6 +196,7 @@ impl Node {
             tets,
             adjacency: OnceLock::new(),
             centroids: OnceLock::new(),
+            longest_edge: OnceLock::new(),
         }
     }
 
@@ -236,6 +240,24 @@ impl Node {
         }
         let grid = CentroidGrid::new(self.require_tets()?);
         Ok(self.centroids.get_or_init(|| grid))
+    }
+
+    /// The tet mesh's longest edge (an atlas's page must hold its faces).
+    pub fn longest_edge(&self) -> Result<f64> {
+        let mesh = self.require_tets()?;
+        Ok(*self.longest_edge.get_or_init(|| {
+            use rayon::prelude::*;
+            (0..mesh.num_tets())
+                .into_par_iter()
+                .map(|t| {
+                    let c = mesh.corners(t);
+                    crate::tetra::mesh::TET_EDGES
+                        .iter()
+                        .map(|&[i, j]| c[i].distance(c[j]))
+                        .fold(0.0, f64::max)
+                })
+                .reduce(|| 0.0, f64::max)
+        }))
     }
 
     /// The colours at `points`; refuses a point that is not finite.

@@ -119,6 +119,7 @@ impl Carving {
         node.adjacency()?;
         node.centroids()?;
         let atlas = CutAtlas::new(options.atlas)?;
+        atlas.check_fits(node.longest_edge()?)?;
         Ok(Carving {
             alive: vec![true; mesh.num_tets()],
             node,

@@ -6,7 +6,9 @@ mod common;
 use common::{changed_pixels, lit_pixels};
 use glam::DVec3;
 use organtex::progress::Silent;
-use organtex::render::{CutMesh, Gpu, GpuScene, Layers, Offscreen, OrbitCamera, Renderer, View};
+use organtex::render::{
+    CutMesh, Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, View,
+};
 use organtex::scene::build::build_scene;
 use organtex::scene::draw::DrawList;
 use organtex::scene::file;
@@ -410,6 +412,220 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
             (far as f64) < 0.01 * (3 * compared) as f64,
             "{far} of {} channels off by more than 6",
             3 * compared
+        );
+    }
+}
+
+/// Hue (degrees, -180..180, red at 0), saturation and value of an sRGB
+/// pixel, as tools/compare_frames.py measures them.
+fn hsv([r, g, b]: [f64; 3]) -> (f64, f64, f64) {
+    let (max, min) = (r.max(g).max(b), r.min(g).min(b));
+    let d = max - min;
+    let hue = if d == 0.0 {
+        0.0
+    } else if max == r {
+        60.0 * ((g - b) / d)
+    } else if max == g {
+        60.0 * ((b - r) / d + 2.0)
+    } else {
+        60.0 * ((r - g) / d + 4.0)
+    };
+    let hue = if hue > 180.0 { hue - 360.0 } else { hue };
+    (hue, if max > 0.0 { d / max } else { 0.0 }, max)
+}
+
+/// Spearman's rank correlation of two samples.
+fn spearman(a: &[f64], b: &[f64]) -> f64 {
+    let ranks = |x: &[f64]| {
+        let mut order: Vec<usize> = (0..x.len()).collect();
+        order.sort_by(|&i, &j| x[i].total_cmp(&x[j]));
+        let mut r = vec![0.0; x.len()];
+        for (rank, &i) in order.iter().enumerate() {
+            r[i] = rank as f64;
+        }
+        r
+    };
+    let (ra, rb) = (ranks(a), ranks(b));
+    let n = a.len() as f64;
+    let mean = (n - 1.0) / 2.0;
+    let cov: f64 = ra
+        .iter()
+        .zip(&rb)
+        .map(|(x, y)| (x - mean) * (y - mean))
+        .sum();
+    let var: f64 = ra.iter().map(|x| (x - mean).powi(2)).sum();
+    cov / var
+}
+
+/// Issue 39: the default preview is lit as an endoscope lights a cavity,
+/// measured as tools/compare_frames.py measures real frames
+/// (tools/frames_reference.json): specular highlights (value >= 0.9,
+/// saturation <= 0.25) on 0.2-5% of the pixels, in small spots; every
+/// facet's mean colour within the in-vivo frames' hue range and not grey;
+/// luminance falling with the distance from the scope (Spearman <= -0.5),
+/// distance and facet found by casting the pixels' rays at the mesh.
+#[test]
+fn the_default_preview_looks_lit_by_an_endoscope() {
+    use rayon::prelude::*;
+    let gpu = gpu();
+    let spec = file::load(&repo("scenes/hysteroscopy_myomas.toml")).unwrap();
+    let baked = build_scene(&spec, false, &Silent).unwrap();
+    let list = DrawList::of(&baked, None);
+    let (w, h) = (640u32, 480u32);
+    let img = organtex::render::picture(&gpu, &baked, &list, [w, h], Lighting::Endoscope).unwrap();
+    let px = |x: u32, y: u32| img.get_pixel(x, y).0.map(|c| c as f64 / 255.0);
+
+    // Highlights, and their spots (8-connected).
+    let bright: Vec<bool> = img
+        .pixels()
+        .map(|p| {
+            let (_, s, v) = hsv(p.0.map(|c| c as f64 / 255.0));
+            v >= 0.9 && s <= 0.25
+        })
+        .collect();
+    let total = (w * h) as f64;
+    let fraction = bright.iter().filter(|&&b| b).count() as f64 / total;
+    let mut seen = vec![false; bright.len()];
+    let mut spots = Vec::new();
+    for start in 0..bright.len() {
+        if !bright[start] || seen[start] {
+            continue;
+        }
+        let (mut stack, mut size) = (vec![start], 0usize);
+        seen[start] = true;
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (x, y) = ((i % w as usize) as i64, (i / w as usize) as i64);
+            for (dx, dy) in [
+                (-1, -1),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx >= 0 && ny >= 0 && nx < w as i64 && ny < h as i64 {
+                    let j = ny as usize * w as usize + nx as usize;
+                    if bright[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        spots.push(size as f64 / total);
+    }
+    spots.sort_by(f64::total_cmp);
+    let median_spot = spots.get(spots.len() / 2).copied().unwrap_or(0.0);
+    let largest = spots.last().copied().unwrap_or(0.0);
+    println!(
+        "highlights {:.2}% in {} spots, median {:.4}%, largest {:.3}%",
+        100.0 * fraction,
+        spots.len(),
+        100.0 * median_spot,
+        100.0 * largest
+    );
+    assert!(
+        (0.002..=0.05).contains(&fraction),
+        "highlights on {:.3}% of the pixels",
+        100.0 * fraction
+    );
+    assert!(median_spot < 0.0005 && largest < 0.01, "spots too large");
+
+    // Depth and facet per sampled pixel, by the pixel's ray.
+    let node = &baked.nodes[0];
+    let mesh = &node.mesh;
+    let lo = mesh
+        .positions
+        .iter()
+        .fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = mesh
+        .positions
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let camera = OrbitCamera::for_scene(&spec.cameras, Some((lo, hi)));
+    let aspect = w as f64 / h as f64;
+    let samples: Vec<(u32, u32)> = (0..h)
+        .step_by(4)
+        .flat_map(|y| (0..w).step_by(4).map(move |x| (x, y)))
+        .collect();
+    let hits: Vec<Option<(f64, usize)>> = samples
+        .par_iter()
+        .map(|&(x, y)| {
+            let ndc = (
+                (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+                1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
+            );
+            let (o, d) = camera.ray(ndc.0, ndc.1, aspect);
+            let mut best: Option<(f64, usize)> = None;
+            for (f, t) in mesh.triangles.iter().enumerate() {
+                let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+                // Moller-Trumbore.
+                let (e1, e2) = (b - a, c - a);
+                let p = d.cross(e2);
+                let det = e1.dot(p);
+                if det.abs() < 1e-12 {
+                    continue;
+                }
+                let s = o - a;
+                let u = s.dot(p) / det;
+                let q = s.cross(e1);
+                let v = d.dot(q) / det;
+                let t = e2.dot(q) / det;
+                if u >= 0.0
+                    && v >= 0.0
+                    && u + v <= 1.0
+                    && t > 1e-9
+                    && best.is_none_or(|(bt, _)| t < bt)
+                {
+                    best = Some((t, f));
+                }
+            }
+            best
+        })
+        .collect();
+    let facets = mesh.facets.as_ref().expect("the uterus has facets");
+    let mut depth = Vec::new();
+    let mut luminance = Vec::new();
+    let mut sums = vec![([0.0; 3], 0usize); facets.names.len()];
+    for (&(x, y), hit) in samples.iter().zip(&hits) {
+        let Some((t, f)) = hit else { continue };
+        let c = px(x, y);
+        depth.push(*t);
+        luminance.push(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]);
+        let s = &mut sums[facets.of_face[*f] as usize];
+        for (sum, v) in s.0.iter_mut().zip(c) {
+            *sum += v;
+        }
+        s.1 += 1;
+    }
+    let rho = spearman(&depth, &luminance);
+    println!(
+        "depth-luminance Spearman {rho:.3} over {} pixels",
+        depth.len()
+    );
+    assert!(rho <= -0.5, "luminance does not fall with distance: {rho}");
+
+    let reference: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(repo("tools/frames_reference.json")).unwrap(),
+    )
+    .unwrap();
+    let range = &reference["aggregate"]["pixel_hue_p5_p95"];
+    let (h0, h1) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    for (name, (sum, n)) in facets.names.iter().zip(&sums) {
+        // Facets the scope barely sees (the serosa, outside) are skipped.
+        if *n < 200 {
+            continue;
+        }
+        let mean = sum.map(|s| s / *n as f64);
+        let (hue, sat, _) = hsv(mean);
+        println!("{name}: {n} samples, mean colour {mean:.3?}, hue {hue:.1}, saturation {sat:.2}");
+        assert!(
+            (h0..=h1).contains(&hue) && sat >= 0.15,
+            "facet {name}: hue {hue:.1} (in-vivo frames {h0:.1}..{h1:.1}), saturation {sat:.2}"
         );
     }
 }

@@ -219,6 +219,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
                 overlap: 0.0,
                 max_stretch: SeamOptions::default().max_stretch,
                 max_conformal: SeamOptions::default().max_conformal,
+                grading: Default::default(),
                 origin: origin.clone(),
             }],
             interior: None,

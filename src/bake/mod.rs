@@ -184,7 +184,7 @@ pub fn bake(
     let t = Instant::now();
     progress.stage("writing", 2);
     let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
-    let glb = gltf::encode(&list, &spec.name)?;
+    let glb = gltf::encode(&list, &spec.name, &spec.cameras)?;
     progress.advance(1);
     // The preview goes through the viewer's renderer. A machine with no
     // GPU adapter, or one that cannot draw it (a limit, memory, a driver

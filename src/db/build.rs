@@ -33,6 +33,9 @@ pub struct Built {
     /// How even the lighting is, when a colour texture is built.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lighting: Option<LightingReport>,
+    /// The colour texture's CIELAB statistics (`colour::LabStats`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub colour: Option<super::colour::LabStats>,
     pub seconds: f64,
 }
 
@@ -50,12 +53,8 @@ pub struct LightingReport {
 /// entry's settings and its source (and mask) bytes. FNV-1a: a change
 /// detector, not a security measure, so no crate is needed for it.
 pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
-    let mut hash = 0xcbf2_9ce4_8422_2325u64;
-    let mut feed = |bytes: &[u8]| {
-        for &b in bytes {
-            hash = (hash ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    };
+    let mut hash = FNV_START;
+    let mut feed = |bytes: &[u8]| hash = fnv1a(hash, bytes);
     feed(&RECIPE.to_le_bytes());
     // The recipe's fields only: the name, kind, shelf, licence and credit
     // label the outputs without changing them. Plain fields with string
@@ -66,6 +65,8 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
         shelf: None,
         licence: None,
         credit: None,
+        capture: None,
+        finish: None,
         ..t.clone()
     };
     feed(
@@ -78,6 +79,15 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
         feed(&std::fs::read(&path).map_err(|e| Error::io(&path, e))?);
     }
     Ok(format!("{hash:016x}"))
+}
+
+pub(super) const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// FNV-1a of `bytes`, continuing from `hash`.
+pub(super) fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 /// Whether `t`'s outputs are built and up to date.
@@ -193,6 +203,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let mut quality = None;
     let mut lit = None;
+    let mut colour = None;
     if let Some(s) = &synthesised {
         if t.outputs.contains(&Output::Colour) {
             let raw = s.pixels.iter().flatten().copied().collect();
@@ -200,6 +211,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
             // 16384: the buffer always fits.
             let img =
                 image::RgbImage::from_raw(s.width as u32, s.height as u32, raw).expect("sized");
+            colour = Some(super::colour::LabStats::of(&img));
             write_png(
                 &dir.join(Output::Colour.file_name()),
                 &image::DynamicImage::ImageRgb8(img),
@@ -271,6 +283,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
         usable_pixels: ex.valid.iter().filter(|&&v| v).count(),
         quality,
         lighting: lit,
+        colour,
         seconds: start.elapsed().as_secs_f64(),
     };
     // Plain fields with string keys: serialising cannot fail.

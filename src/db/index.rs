@@ -145,9 +145,85 @@ pub struct Tissue {
     /// The viewer's shelf, when stated; `shelf()` gives the default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shelf: Option<Shelf>,
+    /// How the photograph was taken: its colours are those of living
+    /// tissue only in vivo.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capture: Option<Capture>,
+    /// How the tissue's surface takes light, when stated; `finish()`
+    /// gives the default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub finish: Option<Finish>,
+}
+
+/// How a source photograph was taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Capture {
+    /// Inside a living body (endoscopy, laparoscopy, fundus camera).
+    InVivo,
+    /// Tissue outside the body (an explanted organ, a phantom).
+    ExVivo,
+    /// A stained section under a microscope.
+    Histology,
+    /// Composed from other photographs.
+    Composed,
+}
+
+impl Capture {
+    pub fn name(self) -> &'static str {
+        match self {
+            Capture::InVivo => "in vivo",
+            Capture::ExVivo => "ex vivo",
+            Capture::Histology => "histology",
+            Capture::Composed => "composed",
+        }
+    }
+}
+
+/// How a tissue's surface takes light (the renderer's and the .glb's
+/// material): the tissue's own roughness under a clear coat, the wet film
+/// of mucus or serous fluid, of some weight and roughness (glTF's
+/// KHR_materials_clearcoat).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Finish {
+    pub roughness: f64,
+    #[serde(default)]
+    pub coat: f64,
+    #[serde(default = "default_coat_roughness")]
+    pub coat_roughness: f64,
+}
+
+fn default_coat_roughness() -> f64 {
+    0.15
+}
+
+impl Finish {
+    /// A living surface: matte tissue under a glistening film.
+    pub const WET: Finish = Finish {
+        roughness: 0.6,
+        coat: 1.0,
+        coat_roughness: 0.15,
+    };
+    /// A dry surface (a stained section, a cut face seen as a picture).
+    pub const DRY: Finish = Finish {
+        roughness: 0.8,
+        coat: 0.0,
+        coat_roughness: 0.5,
+    };
 }
 
 impl Tissue {
+    /// The surface finish: as stated, else wet for a surface tissue, dry
+    /// for the rest.
+    pub fn finish(&self) -> Finish {
+        self.finish.unwrap_or(if self.shelf() == Shelf::Surface {
+            Finish::WET
+        } else {
+            Finish::DRY
+        })
+    }
+
     /// The credit line, else the licence, for showing beside the tissue.
     pub fn credit_line(&self) -> &str {
         self.credit

@@ -3,7 +3,8 @@
 //! maps, plus vessel overlays.
 
 pub mod build;
+pub mod colour;
 pub mod index;
 
 pub use build::{Built, build, exemplar};
-pub use index::{Database, Output, Shelf, Tissue};
+pub use index::{Capture, Database, Finish, Output, Shelf, Tissue};

@@ -33,7 +33,7 @@ fn fs_carved(in: CarvedOut) -> @location(0) vec4<f32> {
     if clipped(in.world) {
         discard;
     }
-    let light = headlamp(normalize(in.normal), in.world);
     // The page is sRGB: sampling decodes it to linear light.
-    return vec4<f32>(textureSampleLevel(page, page_sampler, in.uv, 0.0).rgb * light, 1.0);
+    let c = textureSampleLevel(page, page_sampler, in.uv, 0.0).rgb;
+    return vec4<f32>(shade(c, normalize(in.normal), in.world, cut_finish()), 1.0);
 }

@@ -31,7 +31,7 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_cut(in: CutOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(srgb_to_linear(block_colour(in.world)) * headlamp(normalize(in.normal), in.world), 1.0);
+    return vec4<f32>(shade(srgb_to_linear(block_colour(in.world)), normalize(in.normal), in.world, cut_finish()), 1.0);
 }
 
 // Cuts through a lapped solid texture (sample.wgsl of solid::lst): each
@@ -69,5 +69,5 @@ fn vs_lst_cut(v: LstCutIn) -> LstCutOut {
 @fragment
 fn fs_lst_cut(in: LstCutOut) -> @location(0) vec4<f32> {
     let c = lst_colour(in.slot, in.bary, in.depth);
-    return vec4<f32>(srgb_to_linear(c) * headlamp(normalize(in.normal), in.world), 1.0);
+    return vec4<f32>(shade(srgb_to_linear(c), normalize(in.normal), in.world, cut_finish()), 1.0);
 }

@@ -1,16 +1,18 @@
 // Textured facets, as the .glb draws them (scene::draw): the tissue
 // texture through the material's texture transform (KHR_texture_transform),
 // tangent-space bump from the normal map, blend weight per vertex, lit by
-// a light at the eye as an endoscope lights what it sees (frame.wgsl's
-// headlamp, prepended with the globals). Also the distortion heat map and the wireframe
-// and seam lines, from the same vertices.
+// the scope's light as an endoscope lights what it sees (frame.wgsl's
+// shade, prepended with the globals), the wet film's highlights broken up
+// where the bump folds the surface. Also the distortion heat map and the
+// wireframe and seam lines, from the same vertices.
 
 struct Material {
     // The texture transform as two rows of a 2x3 matrix.
     row0: vec4<f32>,
     row1: vec4<f32>,
     factor: vec4<f32>,
-    // x: bump strength (0: no normal map).
+    // x: bump strength (0: no normal map); the tissue's finish: y its
+    // roughness, z its clear coat's weight, w the coat's roughness.
     normal: vec4<f32>,
 }
 
@@ -102,18 +104,22 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         discard;
     }
     var n = normalize(in.normal);
+    var finish = Finish(material.normal.y, material.normal.z, material.normal.w);
     if globals.flags.x > 0.5 && material.normal.x > 0.0 {
         let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
         let b = cross(n, t) * in.tangent.w;
         let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
         let m_scaled = vec3<f32>(m.xy * material.normal.x, m.z);
         n = normalize(t * m_scaled.x + b * m_scaled.y + n * m_scaled.z);
+        // The film pools smooth on the flats and breaks on the folds.
+        let fold = smoothstep(0.5, 1.0, length(m_scaled.xy));
+        finish.coat_roughness = mix(finish.coat_roughness, 0.6, fold);
     }
     if globals.flags.y > 0.5 {
         return vec4<f32>(heat_colour(in.heat) * headlamp(n, in.world), 1.0);
     }
     let c = textureSample(colour_texture, colour_sampler, in.uv) * material.factor;
-    return vec4<f32>(c.rgb * headlamp(n, in.world), c.a * in.alpha);
+    return vec4<f32>(shade(c.rgb, n, in.world, finish), c.a * in.alpha);
 }
 
 // Lines sit a little towards the eye so the faces they border do not hide

@@ -16,6 +16,32 @@ const BACKGROUND: wgpu::Color = wgpu::Color {
     a: 1.0,
 };
 
+/// The frame's uniform (frame.wgsl's `Globals`), in floats.
+pub(super) const GLOBALS_FLOATS: usize = 32;
+
+/// How a frame is lit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lighting {
+    /// The scope's light at the camera: a spot light falling off with the
+    /// square of the distance, wet highlights, tone mapped.
+    #[default]
+    Endoscope,
+    /// An even light at the camera, no highlights: for judging a texture
+    /// alone.
+    Even,
+}
+
+impl Lighting {
+    pub const ALL: [Lighting; 2] = [Lighting::Endoscope, Lighting::Even];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Lighting::Endoscope => "endoscope",
+            Lighting::Even => "even",
+        }
+    }
+}
+
 /// What a frame shows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Layers {
@@ -28,6 +54,7 @@ pub struct Layers {
     pub seams: bool,
     /// Area distortion of the flattening instead of the texture.
     pub heat: bool,
+    pub lighting: Lighting,
 }
 
 impl Default for Layers {
@@ -39,6 +66,7 @@ impl Default for Layers {
             wireframe: false,
             seams: false,
             heat: false,
+            lighting: Lighting::default(),
         }
     }
 }
@@ -66,7 +94,7 @@ impl Renderer {
     ) {
         let cam = &view.camera;
         let aspect = size[0] as f64 / size[1].max(1) as f64;
-        let mut g = [0.0f32; 28];
+        let mut g = [0.0f32; GLOBALS_FLOATS];
         g[..16].copy_from_slice(&cam.view_proj(aspect).to_cols_array());
         let eye = cam.eye();
         g[16..19].copy_from_slice(&eye.as_vec3().to_array());
@@ -77,6 +105,11 @@ impl Renderer {
         }
         g[24] = if view.layers.bump { 1.0 } else { 0.0 };
         g[25] = if view.layers.heat { 1.0 } else { 0.0 };
+        g[26] = (view.layers.lighting == Lighting::Endoscope) as u8 as f32;
+        g[27] = crate::scene::draw::SCOPE_EXPOSURE as f32;
+        let (outer, _) = crate::scene::draw::scope_cone(cam.fov, aspect);
+        g[28..31].copy_from_slice(&(cam.target - eye).normalize_or_zero().as_vec3().to_array());
+        g[31] = outer.cos() as f32;
         queue.write_buffer(&self.globals, 0, bytemuck::cast_slice(&g));
 
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -79,7 +79,8 @@ pub struct GpuScene {
 }
 
 /// The uniform of a material: the transform's 2x3 matrix in two rows,
-/// the colour factor, the bump strength (0 without a normal map).
+/// the colour factor, the bump strength (0 without a normal map) and the
+/// finish.
 fn material_uniform(m: &Material, transform: Option<&Transform>) -> [f32; 16] {
     let t = transform.unwrap_or(&Transform::IDENTITY);
     let (s, c) = t.rotation.sin_cos();
@@ -94,6 +95,9 @@ fn material_uniform(m: &Material, transform: Option<&Transform>) -> [f32; 16] {
     u[4..8].copy_from_slice(&row1);
     u[8..12].copy_from_slice(&m.factor);
     u[12] = bump;
+    u[13] = m.finish.roughness as f32;
+    u[14] = m.finish.coat as f32;
+    u[15] = m.finish.coat_roughness as f32;
     u
 }
 
@@ -607,6 +611,7 @@ mod tests {
             normal: None,
             blend: false,
             double_sided: true,
+            finish: crate::db::Finish::WET,
             facet: None,
             role: crate::scene::draw::Role::Tissue,
         };

@@ -22,9 +22,9 @@ mod preview;
 
 pub use camera::OrbitCamera;
 pub use carved::{CarveMask, CarvedFace, GpuCarved};
-pub use frame::{Layers, View};
+pub use frame::{Layers, Lighting, View};
 pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};
 pub use offscreen::Offscreen;
 pub use pipelines::Renderer;
-pub use preview::preview;
+pub use preview::{picture, preview, scope_field};

@@ -114,6 +114,8 @@ fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
         mag_filter: wgpu::FilterMode::Linear,
         min_filter: wgpu::FilterMode::Linear,
         mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        // Anisotropic filtering (8x) would sharpen the walls seen edge on,
+        // but costs llvmpipe 1.7x the frame time.
         anisotropy_clamp: 1,
         ..Default::default()
     })
@@ -277,7 +279,7 @@ impl Renderer {
         });
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
-            size: 4 * 28,
+            size: 4 * super::frame::GLOBALS_FLOATS as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });

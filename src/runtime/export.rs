@@ -91,5 +91,5 @@ pub fn surface_glb(carving: &Carving) -> Result<Vec<u8>> {
             primitives,
         }],
     };
-    crate::scene::gltf::encode(&list, &format!("{} carved", node.name))
+    crate::scene::gltf::encode(&list, &format!("{} carved", node.name), &[])
 }

@@ -56,10 +56,13 @@ pub struct BakedNode {
 /// Where each database output used lives, by tissue id.
 #[derive(Clone, Debug, Default)]
 pub struct Tissues {
+    /// By tissue id, and by `FacetSettings::colour_key` for a graded one.
     pub colour: HashMap<String, std::path::PathBuf>,
     pub height: HashMap<String, std::path::PathBuf>,
     pub overlay: HashMap<String, std::path::PathBuf>,
     pub layers: HashMap<String, std::path::PathBuf>,
+    /// How each tissue takes light, by id.
+    pub finish: HashMap<String, crate::db::Finish>,
 }
 
 impl Tissues {
@@ -71,6 +74,14 @@ impl Tissues {
             Output::Overlay => &self.overlay,
             Output::Layers => &self.layers,
         }
+    }
+
+    /// How tissue `id` takes light (dry when the scene did not load it).
+    pub fn finish_of(&self, id: &str) -> crate::db::Finish {
+        self.finish
+            .get(id)
+            .copied()
+            .unwrap_or(crate::db::Finish::DRY)
     }
 
     fn of_mut(&mut self, output: Output) -> &mut HashMap<String, std::path::PathBuf> {
@@ -150,6 +161,9 @@ pub fn ensure_tissues(
     for node in &spec.nodes {
         for f in &node.facets {
             needed.push((f.texture.clone(), Output::Colour));
+            if let Some(m) = &f.grading.matched {
+                needed.push((m.clone(), Output::Colour));
+            }
             if f.bump > 0.0 {
                 needed.push((f.texture.clone(), Output::Height));
             }
@@ -189,6 +203,14 @@ pub fn ensure_tissues(
         tissues
             .of_mut(*output)
             .insert(id.clone(), database.output_path(id, *output));
+        tissues.finish.insert(id.clone(), t.finish());
+    }
+    // Graded colours, each made once and kept beside its entry's build.
+    for f in spec.nodes.iter().flat_map(|n| &n.facets) {
+        if !f.grading.is_identity() {
+            let path = crate::db::colour::graded_colour(database, &f.texture, &f.grading)?;
+            tissues.colour.insert(f.colour_key(), path);
+        }
     }
     Ok(tissues)
 }
@@ -433,7 +455,7 @@ fn compositors(
     for (look, bf) in facets.iter().enumerate() {
         let s = &bf.settings;
         looks.push(Look {
-            colour: texture(&tissues.colour[&s.texture])?,
+            colour: texture(&tissues.colour[&s.colour_key()])?,
             transform: colour_transform(s),
             overlay: match &s.overlay {
                 Some(o) => Some(Overlay {

@@ -28,6 +28,7 @@ use glam::{DVec2, DVec3};
 use super::atlas::Atlas;
 use super::build::{BakedFacet, BakedNode, BakedScene, colour_transform, overlay_transform};
 use super::composite::Transform;
+use crate::db::Finish;
 use crate::error::{Error, Result};
 
 /// How a texture repeats past its edges.
@@ -108,17 +109,25 @@ pub fn png_bytes(img: &image::DynamicImage) -> Result<Vec<u8>> {
 
 /// A tangent-space normal map from a 16-bit height map, tiling like it.
 /// Relief: the height range spans a 64th of the texture's width, so the
-/// normal scale (the facet's bump) reads as a strength near 1.
+/// normal scale (the facet's bump) reads as a strength near 1. The height
+/// is first smoothed over a few pixels (a wet film rounds the relief off):
+/// the raw synthesised height has one-pixel crevices whose normals, seen
+/// edge on, turn the tissue's pit pattern into black outlines.
 pub fn normal_map(height: &Path) -> Result<image::RgbImage> {
     let img = crate::synth::exemplar::read_image(height)?.to_luma16();
-    let (w, h) = (img.width() as i64, img.height() as i64);
-    let at = |x: i64, y: i64| {
-        img.get_pixel(x.rem_euclid(w) as u32, y.rem_euclid(h) as u32)[0] as f64 / 65535.0
-    };
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let mut z: Vec<f64> = img.pixels().map(|p| p[0] as f64 / 65535.0).collect();
+    // Three periodic box blurs of radius 2: nearly a Gaussian of sigma 2,
+    // wrapping as the texture tiles (image's blur clamps at the edges).
+    for _ in 0..3 {
+        z = box_blur_periodic(&z, w, h, 2);
+    }
+    let at =
+        |x: i64, y: i64| z[y.rem_euclid(h as i64) as usize * w + x.rem_euclid(w as i64) as usize];
     let relief = w as f64 / 64.0;
     let mut out = image::RgbImage::new(w as u32, h as u32);
-    for y in 0..h {
-        for x in 0..w {
+    for y in 0..h as i64 {
+        for x in 0..w as i64 {
             let dx = (at(x + 1, y) - at(x - 1, y)) / 2.0 * relief;
             // Green is up the image (glTF's +Y), against the row order.
             let dy_up = -(at(x, y + 1) - at(x, y - 1)) / 2.0 * relief;
@@ -134,6 +143,46 @@ pub fn normal_map(height: &Path) -> Result<image::RgbImage> {
         }
     }
     Ok(out)
+}
+
+/// `z` (w x h, row-major) averaged over (2r+1)^2 pixels, wrapping round.
+fn box_blur_periodic(z: &[f64], w: usize, h: usize, r: i64) -> Vec<f64> {
+    let n = (2 * r + 1) as f64;
+    let wrap = |i: i64, len: usize| i.rem_euclid(len as i64) as usize;
+    let mut rows = vec![0.0; z.len()];
+    for y in 0..h {
+        for x in 0..w {
+            rows[y * w + x] = (-r..=r)
+                .map(|d| z[y * w + wrap(x as i64 + d, w)])
+                .sum::<f64>()
+                / n;
+        }
+    }
+    let mut out = vec![0.0; z.len()];
+    for y in 0..h {
+        for x in 0..w {
+            out[y * w + x] = (-r..=r)
+                .map(|d| rows[wrap(y as i64 + d, h) * w + x])
+                .sum::<f64>()
+                / n;
+        }
+    }
+    out
+}
+
+/// The endoscope light's exposure: what a surface facing the scope at a
+/// quarter of the view's typical depth receives (the renderer before its
+/// tone curve; the .glb's spot light's intensity).
+pub const SCOPE_EXPOSURE: f64 = 1.1;
+
+/// The scope's light cone for a view `fov` degrees high and `aspect` wide
+/// to high: (outer, inner) half angles in radians. It reaches a little
+/// past the picture's corners and is full within the inner angle.
+pub fn scope_cone(fov: f64, aspect: f64) -> (f64, f64) {
+    let half_diagonal = ((fov.to_radians() / 2.0).tan() * (1.0 + aspect * aspect).sqrt()).atan();
+    let outer = (half_diagonal * 1.15).min(std::f64::consts::FRAC_PI_2);
+    let inner = ((outer.cos() + 1.0) / 2.0).acos();
+    (outer, inner)
 }
 
 /// What a material's texture shows of its facet.
@@ -172,6 +221,8 @@ pub struct Material {
     /// serosa's face away): those are culled, which a software rasteriser
     /// feels.
     pub double_sided: bool,
+    /// How the surface takes light (its tissue's, from the database).
+    pub finish: Finish,
     /// The facet (node, facet id in the node's mesh) whose settings set
     /// the transform.
     pub facet: Option<(usize, usize)>,
@@ -194,6 +245,7 @@ impl Material {
             normal: None,
             blend: false,
             double_sided: true,
+            finish: Finish::DRY,
             facet: None,
             role: Role::Baked,
         }
@@ -360,7 +412,10 @@ impl DrawList {
                 node.topology.boundary_loops().is_empty() && node.mesh.signed_volume() > 0.0;
             for (j, facet) in node.facets.iter().enumerate() {
                 let primitives = match atlases {
-                    Some(a) => list.atlas_primitives(node, facet, &a[k][j]),
+                    Some(a) => {
+                        let finish = scene.tissues.finish_of(&facet.settings.texture);
+                        list.atlas_primitives(node, facet, &a[k][j], finish)
+                    }
                     None => list.layered_primitives(scene, (k, j)),
                 };
                 if single_sided {
@@ -394,8 +449,8 @@ impl DrawList {
         let piece = &facet.piece;
         let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
         let colour = TextureRef {
-            key: format!("colour:{}", s.texture),
-            source: Source::Image(scene.tissues.colour[&s.texture].clone()),
+            key: format!("colour:{}", s.colour_key()),
+            source: Source::Image(scene.tissues.colour[&s.colour_key()].clone()),
             wrap: Wrap::Repeat,
         };
         let normal = (s.bump > 0.0).then(|| NormalMap {
@@ -417,6 +472,7 @@ impl DrawList {
             normal: normal.clone(),
             blend,
             double_sided: true,
+            finish: scene.tissues.finish_of(&s.texture),
             facet: Some((k, j)),
             role: Role::Tissue,
         };
@@ -499,6 +555,8 @@ impl DrawList {
                 normal: None,
                 blend: true,
                 double_sided: true,
+                // The vessels lie under the tissue's own film.
+                finish: scene.tissues.finish_of(&s.texture),
                 facet: Some((k, j)),
                 role: Role::Overlay,
             });
@@ -530,6 +588,7 @@ impl DrawList {
         node: &BakedNode,
         facet: &BakedFacet,
         atlas: &Atlas,
+        finish: Finish,
     ) -> Vec<Primitive> {
         let name = format!("{}/{}", node.name, facet.report.facet);
         let raw = atlas
@@ -539,7 +598,10 @@ impl DrawList {
             .collect();
         let img = image::RgbaImage::from_raw(atlas.width as u32, atlas.height as u32, raw)
             .expect("sized");
-        let m = self.material(Material::baked(name.clone(), format!("atlas:{name}"), img));
+        let m = self.material(Material {
+            finish,
+            ..Material::baked(name.clone(), format!("atlas:{name}"), img)
+        });
         let piece = &facet.piece;
         let layer = piece.mesh.uvs.as_ref().expect("unwrapped");
         let mut own = Stream::default();

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use super::uterus::CavityParams;
+use crate::db::colour::Grading;
 use crate::error::{Error, Result};
 use crate::memory::{check, product};
 use crate::solid::InteriorMethod;
@@ -95,6 +96,14 @@ struct FacetEntry {
     max_stretch: Spanned<f64>,
     #[serde(default = "default_max_conformal")]
     max_conformal: Spanned<f64>,
+    #[serde(default = "zero")]
+    hue: Spanned<f64>,
+    #[serde(default = "unit")]
+    saturation: Spanned<f64>,
+    #[serde(default = "unit")]
+    brightness: Spanned<f64>,
+    #[serde(rename = "match")]
+    matched: Option<Spanned<String>>,
 }
 
 fn default_tile() -> Spanned<f64> {
@@ -102,6 +111,9 @@ fn default_tile() -> Spanned<f64> {
 }
 fn zero() -> Spanned<f64> {
     Spanned::new(0..0, 0.0)
+}
+fn unit() -> Spanned<f64> {
+    Spanned::new(0..0, 1.0)
 }
 fn no_offset() -> Spanned<[f64; 2]> {
     Spanned::new(0..0, [0.0; 2])
@@ -223,6 +235,27 @@ pub struct BakeSettings {
     /// most `MAX_BLOCK`).
     #[serde(default = "default_interior_voxels")]
     pub interior_voxels: usize,
+    /// The preview's light: "endoscope" (the scope's spot light, wet
+    /// highlights) or "even" (for judging the textures alone).
+    #[serde(default, skip_serializing_if = "is_endoscope")]
+    pub preview_lighting: PreviewLighting,
+    /// The preview seen through the scope: its circular field, dark past
+    /// the rim, with the lens's vignetting.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub preview_scope: bool,
+}
+
+/// How the bake's preview is lit (`render::Lighting`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PreviewLighting {
+    #[default]
+    Endoscope,
+    Even,
+}
+
+fn is_endoscope(l: &PreviewLighting) -> bool {
+    *l == PreviewLighting::Endoscope
 }
 
 fn default_band() -> usize {
@@ -241,6 +274,8 @@ impl Default for BakeSettings {
             seam_band: default_band(),
             views: default_views(),
             interior_voxels: default_interior_voxels(),
+            preview_lighting: PreviewLighting::default(),
+            preview_scope: false,
         }
     }
 }
@@ -278,9 +313,21 @@ pub struct FacetSettings {
     pub max_stretch: f64,
     /// ... and its conf_mean at most `max_conformal`.
     pub max_conformal: f64,
+    /// The tissue's colour grading (`hue`, `saturation`, `brightness`,
+    /// `match`).
+    #[serde(flatten)]
+    pub grading: Grading,
     /// Where the facet's texture is named, for errors found later.
     #[serde(skip)]
     pub origin: Origin,
+}
+
+impl FacetSettings {
+    /// The name of the facet's colour texture, graded as it asks
+    /// (`Tissues::colour`'s key).
+    pub fn colour_key(&self) -> String {
+        self.grading.key(&self.texture)
+    }
 }
 
 /// A place in a scene file.
@@ -584,6 +631,22 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
             |_| true,
             "a finite number of degrees",
         )?;
+        let grading = Grading {
+            hue: checked(&f.hue, "hue", |_| true, "a finite number of degrees")?,
+            saturation: checked(
+                &f.saturation,
+                "saturation",
+                |x| (0.0..=4.0).contains(&x),
+                "from 0 to 4",
+            )?,
+            brightness: checked(
+                &f.brightness,
+                "brightness",
+                |x| x > 0.0 && x <= 4.0,
+                "above 0, at most 4",
+            )?,
+            matched: f.matched.as_ref().map(|m| m.get_ref().clone()),
+        };
         let offset = *f.offset.get_ref();
         if !offset.iter().all(|x| x.is_finite()) {
             return Err(at(
@@ -608,6 +671,7 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
             overlap,
             max_stretch,
             max_conformal,
+            grading,
             origin: Origin {
                 file: path.to_path_buf(),
                 line: line_of(text, f.texture.span().start),
@@ -771,6 +835,7 @@ pub fn check_tissues(spec: &SceneSpec, ids: &[String]) -> Result<()> {
             for (key, id) in [
                 ("texture", Some(&f.texture)),
                 ("overlay", f.overlay.as_ref()),
+                ("match", f.grading.matched.as_ref()),
             ] {
                 if let Some(id) = id
                     && !known(id)

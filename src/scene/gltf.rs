@@ -15,6 +15,7 @@ use json::validation::{Checked::Valid, USize64};
 
 use super::composite::Transform;
 use super::draw::{DrawList, Material, Part, Primitive, Stream, TextureRef, Wrap};
+use super::file::Camera;
 use crate::error::{Error, Result};
 
 /// Builds the JSON and the binary chunk together.
@@ -280,7 +281,7 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
             base_color_factor: json::material::PbrBaseColorFactor(m.factor),
             base_color_texture: Some(info(colour, m.transform.as_ref())),
             metallic_factor: json::material::StrengthFactor(0.0),
-            roughness_factor: json::material::StrengthFactor(0.45),
+            roughness_factor: json::material::StrengthFactor(m.finish.roughness as f32),
             metallic_roughness_texture: None,
             extensions: None,
             extras: Default::default(),
@@ -289,9 +290,24 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
         occlusion_texture: None,
         emissive_texture: None,
         emissive_factor: json::material::EmissiveFactor([0.0; 3]),
-        extensions: None,
+        extensions: clearcoat(&m.finish),
         extras: Default::default(),
     }))
+}
+
+/// The wet film as KHR_materials_clearcoat, on a finish that has one.
+fn clearcoat(f: &crate::db::Finish) -> Option<json::extensions::material::Material> {
+    (f.coat > 0.0).then(|| {
+        let mut e = json::extensions::material::Material::default();
+        e.others.insert(
+            "KHR_materials_clearcoat".into(),
+            serde_json::json!({
+                "clearcoatFactor": f.coat,
+                "clearcoatRoughnessFactor": f.coat_roughness,
+            }),
+        );
+        e
+    })
 }
 
 /// The glTF primitive of a non-empty stream.
@@ -356,8 +372,9 @@ fn node(
     })
 }
 
-/// The .glb bytes of `list` as scene `name`.
-pub fn encode(list: &DrawList, name: &str) -> Result<Vec<u8>> {
+/// The .glb bytes of `list` as scene `name`, seen from `cameras` (glTF
+/// cameras, in order), the first carrying the scope's light.
+pub fn encode(list: &DrawList, name: &str, cameras: &[Camera]) -> Result<Vec<u8>> {
     let mut b = Builder::new();
     let mut materials = Vec::with_capacity(list.materials.len());
     for m in &list.materials {
@@ -373,6 +390,9 @@ pub fn encode(list: &DrawList, name: &str) -> Result<Vec<u8>> {
             .collect();
         nodes.push(node(&mut b, &part.name, prims));
     }
+    for (i, c) in cameras.iter().enumerate() {
+        nodes.push(camera_node(&mut b, c, i));
+    }
     let s = b.root.push(json::Scene {
         extensions: None,
         extras: Default::default(),
@@ -383,7 +403,94 @@ pub fn encode(list: &DrawList, name: &str) -> Result<Vec<u8>> {
     if list.materials.iter().any(|m| m.transform.is_some()) {
         b.root.extensions_used.push("KHR_texture_transform".into());
     }
+    if list.materials.iter().any(|m| m.finish.coat > 0.0) {
+        b.root
+            .extensions_used
+            .push("KHR_materials_clearcoat".into());
+    }
+    if let Some(first) = cameras.first() {
+        b.root.extensions_used.push("KHR_lights_punctual".into());
+        let mut root = json::extensions::root::Root::default();
+        root.others.insert(
+            "KHR_lights_punctual".into(),
+            serde_json::json!({ "lights": [scope_light(first)] }),
+        );
+        b.root.extensions = Some(root);
+    }
     b.finish()
+}
+
+/// A scene camera as a glTF perspective camera on a node of its own,
+/// turned to look down its -Z (glTF's convention, +Y up). The first also
+/// holds the scope's light.
+fn camera_node(b: &mut Builder, c: &Camera, i: usize) -> json::Index<json::Node> {
+    let eye = DVec3::from(c.position);
+    let forward = (DVec3::from(c.look_at) - eye).normalize_or(DVec3::NEG_Z);
+    // +Y up unless the camera looks along it.
+    let up = if forward.y.abs() > 0.99 {
+        DVec3::Z
+    } else {
+        DVec3::Y
+    };
+    let right = forward.cross(up).normalize();
+    let rotation = glam::DQuat::from_mat3(&glam::DMat3::from_cols(
+        right,
+        right.cross(forward),
+        -forward,
+    ));
+    let camera = b.root.push(json::Camera {
+        name: Some(format!("camera {i}")),
+        orthographic: None,
+        perspective: Some(json::camera::Perspective {
+            aspect_ratio: None,
+            yfov: c.fov.to_radians() as f32,
+            zfar: None,
+            znear: 0.05,
+            extensions: None,
+            extras: Default::default(),
+        }),
+        type_: Valid(json::camera::Type::Perspective),
+        extensions: None,
+        extras: Default::default(),
+    });
+    let extensions = (i == 0).then(|| {
+        let mut e = json::extensions::scene::Node::default();
+        e.others.insert(
+            "KHR_lights_punctual".into(),
+            serde_json::json!({ "light": 0 }),
+        );
+        e
+    });
+    b.root.push(json::Node {
+        camera: Some(camera),
+        name: Some(if i == 0 {
+            "scope".into()
+        } else {
+            format!("camera {i}")
+        }),
+        translation: Some(eye.as_vec3().to_array()),
+        rotation: Some(json::scene::UnitQuaternion(rotation.as_quat().to_array())),
+        extensions,
+        ..Default::default()
+    })
+}
+
+/// The scope's light as a KHR_lights_punctual spot at the camera: its
+/// cone the renderer's (`draw::scope_cone`, for a 4:3 picture), its
+/// intensity in candela such that a surface facing it at a quarter of the
+/// view's depth gets the renderer's exposure (irradiance I / d^2, and a
+/// Lambertian surface's radiance albedo E / pi).
+fn scope_light(c: &Camera) -> serde_json::Value {
+    let depth = (DVec3::from(c.look_at) - DVec3::from(c.position)).length();
+    let (outer, inner) = super::draw::scope_cone(c.fov, 4.0 / 3.0);
+    let r = depth / 4.0;
+    serde_json::json!({
+        "type": "spot",
+        "name": "scope light",
+        "color": [1.0, 0.97, 0.92],
+        "intensity": std::f64::consts::PI * super::draw::SCOPE_EXPOSURE * r * r,
+        "spot": { "innerConeAngle": inner, "outerConeAngle": outer },
+    })
 }
 
 /// The .glb bytes of one opaque mesh named `name`, textured with `texture`
@@ -419,7 +526,7 @@ pub fn textured_mesh(
             }],
         }],
     };
-    encode(&list, name)
+    encode(&list, name, &[])
 }
 
 /// The section as a .glb: its triangles facing the plane's normal, with

@@ -46,6 +46,20 @@ impl Viewer {
         ui.checkbox(&mut self.layers.wireframe, "wireframe");
         ui.checkbox(&mut self.layers.seams, "seams");
         ui.checkbox(&mut self.layers.heat, "distortion");
+        ui.horizontal(|ui| {
+            ui.label("Lighting:");
+            for l in crate::render::Lighting::ALL {
+                ui.selectable_value(&mut self.layers.lighting, l, l.name())
+                    .on_hover_text(match l {
+                        crate::render::Lighting::Endoscope => {
+                            "the scope's light: falls off with distance, wet highlights"
+                        }
+                        crate::render::Lighting::Even => {
+                            "an even light, for judging the texture alone"
+                        }
+                    });
+            }
+        });
         if self.layers != before {
             self.touch();
         }

@@ -36,6 +36,7 @@ impl Viewer {
                     s.offset = offset;
                 });
             }
+            self.colour_panel(ui, f, &s);
             // The facet's unwrap bound: seams against an even texture
             // scale, taken up by the next unwrap.
             let mut stretch = s.max_stretch;
@@ -50,6 +51,55 @@ impl Viewer {
                 let mut now = doc.settings(f).clone();
                 now.max_stretch = stretch;
                 doc.set_settings(f, now);
+            }
+        }
+    }
+
+    /// The facet's colour grading: hue, saturation, brightness, and a
+    /// match onto another tissue's colours; the graded texture is made in
+    /// the background (`rebuild_tissues`).
+    fn colour_panel(
+        &mut self,
+        ui: &mut egui::Ui,
+        f: (usize, usize),
+        s: &crate::scene::file::FacetSettings,
+    ) {
+        let mut g = s.grading.clone();
+        ui.label("Colour");
+        let mut changed = false;
+        changed |= ui
+            .add(egui::Slider::new(&mut g.hue, -60.0..=60.0).text("hue °"))
+            .changed();
+        changed |= ui
+            .add(egui::Slider::new(&mut g.saturation, 0.0..=2.0).text("saturation"))
+            .changed();
+        changed |= ui
+            .add(egui::Slider::new(&mut g.brightness, 0.25..=2.0).text("brightness"))
+            .changed();
+        let colours: Vec<String> = self
+            .tissues
+            .iter()
+            .filter(|e| e.tissue.outputs.contains(&crate::db::Output::Colour))
+            .map(|e| e.tissue.id.clone())
+            .collect();
+        egui::ComboBox::from_label("match")
+            .selected_text(g.matched.as_deref().unwrap_or("none"))
+            .show_ui(ui, |ui| {
+                changed |= ui.selectable_value(&mut g.matched, None, "none").changed();
+                for id in colours {
+                    changed |= ui
+                        .selectable_value(&mut g.matched, Some(id.clone()), id)
+                        .changed();
+                }
+            })
+            .response
+            .on_hover_text("take on that tissue's colour statistics (mean and spread in CIELAB)");
+        if changed && let Some(doc) = &mut self.doc {
+            let mut now = s.clone();
+            now.grading = g;
+            doc.set_settings(f, now);
+            if doc.baked.is_some() {
+                self.rebuild_tissues();
             }
         }
     }
@@ -148,6 +198,7 @@ mod tests {
             overlap: 0.0,
             max_stretch: SeamOptions::default().max_stretch,
             max_conformal: SeamOptions::default().max_conformal,
+            grading: Default::default(),
             origin: Default::default(),
         }
     }

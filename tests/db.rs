@@ -233,7 +233,8 @@ fn every_entry_states_its_capture_and_surfaces_are_wet() {
 /// below 1 (the wrap no rougher than the interior) and within 0.04.
 #[test]
 fn matching_a_tissue_moves_its_colours_and_keeps_its_tiling() {
-    use organtex::db::colour::{Grade, Grading, LabStats, graded_colour, stats_of};
+    use organtex::db::build::{graded_colour, stats_of};
+    use organtex::db::colour::{Grade, Grading, LabStats};
     use organtex::synth::quality::{Rgb, seam};
     let db = Database::open(&shipped()).unwrap();
     let ids = ["porcine-colon".to_string(), "colon-mucosa".to_string()];

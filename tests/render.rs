@@ -345,9 +345,13 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
         camera.pitch = 0.0;
         let size = 256u32;
         let target = Offscreen::new(&gpu, &renderer, [size, size]);
+        // The even light, whose formula the CPU side repeats below.
         let view = View {
             camera,
-            layers: Layers::default(),
+            layers: Layers {
+                lighting: Lighting::Even,
+                ..Layers::default()
+            },
             clip: None,
         };
         target.draw(&renderer, &gpu.device, &gpu.queue, &scene, &view);

@@ -452,10 +452,39 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
             "uterus/myoma-front",
             "uterus/myoma-back",
             "uterus/polyp",
-            "uterus/serosa"
+            "uterus/serosa",
+            "scope",
+            "camera 1",
+            "camera 2"
         ]
     );
+    // The scene's cameras, the first carrying the scope's spot light, and
+    // the wet film as a clear coat on every surface tissue (issue 39).
+    assert_eq!(json["cameras"].as_array().unwrap().len(), 3);
+    let scope = &json["nodes"][5];
+    assert_eq!(scope["camera"], 0);
+    assert_eq!(scope["extensions"]["KHR_lights_punctual"]["light"], 0);
+    let light = &json["extensions"]["KHR_lights_punctual"]["lights"][0];
+    assert_eq!(light["type"], "spot");
+    assert!(light["intensity"].as_f64().unwrap() > 0.0);
     let materials = json["materials"].as_array().unwrap();
+    assert!(materials.iter().all(|m| {
+        m["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"].as_f64() > Some(0.0)
+    }));
+    for used in [
+        "KHR_lights_punctual",
+        "KHR_materials_clearcoat",
+        "KHR_texture_transform",
+    ] {
+        assert!(
+            json["extensionsUsed"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e == used),
+            "{used}"
+        );
+    }
     assert!(materials.iter().any(|m| m["alphaMode"] == "BLEND"));
     // The uterine wall is a closed solid: its back faces are never seen,
     // so engines may cull them.

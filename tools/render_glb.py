@@ -96,6 +96,9 @@ def main():
     ap.add_argument("--lighting", choices=list(LIGHTING), default="unitless")
     ap.add_argument("--view", default="Standard"), ap.add_argument("--exposure", type=float, default=0.0)
     ap.add_argument("--denoise", action="store_true", help="OpenImageDenoise (Cycles)")
+    ap.add_argument("--check", action="store_true",
+                    help="exit 1 unless Blender reads every extension the file uses, a material with a "
+                         "clear coat came in coated, a light came in, and the render shows highlights")
     args = ap.parse_args()
     width, height = (int(v) for v in args.size.lower().split("x"))
     try:
@@ -193,6 +196,19 @@ def main():
                       "materials": materials, "lights": lights, "render_seconds": round(seconds, 2),
                       "highlight_fraction": round(frac, 6), "highlight_fraction_lit": round(frac_lit, 6),
                       "lit_fraction": round(float(lit.mean()), 6), "png": png}))
+    if args.check:
+        failures = [f"Blender ignores {e}" for e in exts["ignored"]]
+        if "KHR_materials_clearcoat" in exts["used"] and not any(m.get("coat") for m in materials):
+            failures.append("no material came in with a clear coat")
+        if not lights:
+            failures.append("no light came in")
+        if frac <= 0.0:
+            failures.append("the render shows no highlight")
+        for f in failures:
+            print(f"render_glb.py: FAIL: {f}")
+        if failures:
+            sys.exit(1)
+        print("render_glb.py: every extension read, coat and light in, highlights shown")
 
 
 if __name__ == "__main__":

@@ -107,6 +107,12 @@ python3 tools/compare_uv.py --quick --organtex target/release/organtex
 step "tools/check_bakes.py (every scene baked and the C example's carved surface: Khronos glTF validator, trimesh)"
 python3 tools/check_bakes.py --organtex target/release/organtex --glb target/capi-examples/carved.glb
 
+step "tools/compare_frames.py --check (the default preview beside real in-vivo frames: highlights in small spots)"
+python3 tools/compare_frames.py "$bake/preview.png" --check
+
+step "tools/render_glb.py --check (Blender reads the default scene.glb's camera, scope light and clear coats, and shows highlights)"
+python3 tools/render_glb.py "$bake/scene.glb" target/blender-preview.png --size 480x360 --samples 8 --check
+
 step "tools/compare_morph.py --quick --uterus --check (morph vs nearest slice and cross-fading on a brain MRI; the bundled uterus scene's cuts)"
 python3 tools/compare_morph.py --quick --uterus --check --organtex target/release/organtex
 

@@ -70,8 +70,8 @@ pub fn run(args: Args) -> Result<()> {
                 width(&|t| licence(t).len(), "licence"),
             );
             println!(
-                "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<24}{:<wl$}built",
-                "id", "name", "kind", "shelf", "outputs", "licence"
+                "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<11}{:<24}{:<wl$}{:<19}built",
+                "id", "name", "kind", "shelf", "capture", "outputs", "licence", "L* a* b* (mean)"
             );
             for t in &db.tissues {
                 let outputs: Vec<String> = t
@@ -90,14 +90,28 @@ pub fn run(args: Args) -> Result<()> {
                     (true, false) => "out of date",
                     (true, true) => "yes",
                 };
+                // The colour texture's CIELAB mean, what `match` moves
+                // another texture onto.
+                let lab = if db
+                    .output_path(&t.id, organtex::db::Output::Colour)
+                    .is_file()
+                {
+                    organtex::db::build::stats_of(&db, &t.id)
+                        .map(|s| format!("{:.0} {:.0} {:.0}", s.mean[0], s.mean[1], s.mean[2]))
+                        .unwrap_or_default()
+                } else {
+                    "-".into()
+                };
                 println!(
-                    "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<24}{:<wl$}{built}",
+                    "{:<wi$}{:<wn$}{:<wk$}{:<10}{:<11}{:<24}{:<wl$}{:<19}{built}",
                     t.id,
                     t.name,
                     t.kind,
                     t.shelf().title().to_lowercase(),
+                    t.capture.map_or("?", |c| c.name()),
                     outputs.join(", "),
                     licence(t),
+                    lab,
                 );
             }
         }

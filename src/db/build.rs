@@ -3,10 +3,12 @@
 //! into `database/build/<id>/`, with a `report.json` of quality figures and
 //! timings per entry.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use serde::Serialize;
 
+use super::colour::{Grade, Grading, LabStats};
 use super::index::{Database, Lighting, Output, Tissue};
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
@@ -35,7 +37,7 @@ pub struct Built {
     pub lighting: Option<LightingReport>,
     /// The colour texture's CIELAB statistics (`colour::LabStats`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub colour: Option<super::colour::LabStats>,
+    pub colour: Option<LabStats>,
     pub seconds: f64,
 }
 
@@ -81,10 +83,10 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
     Ok(format!("{hash:016x}"))
 }
 
-pub(super) const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// FNV-1a of `bytes`, continuing from `hash`.
-pub(super) fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
+fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
     bytes.iter().fold(hash, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
@@ -211,7 +213,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
             // 16384: the buffer always fits.
             let img =
                 image::RgbImage::from_raw(s.width as u32, s.height as u32, raw).expect("sized");
-            colour = Some(super::colour::LabStats::of(&img));
+            colour = Some(LabStats::of(&img));
             write_png(
                 &dir.join(Output::Colour.file_name()),
                 &image::DynamicImage::ImageRgb8(img),
@@ -290,4 +292,54 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
     let report = serde_json::to_string_pretty(&built).expect("serialises");
     write_file(&dir.join("report.json"), |w| writeln!(w, "{report}"))?;
     Ok(built)
+}
+
+/// The colour statistics of built entry `id`'s colour texture.
+pub fn stats_of(db: &Database, id: &str) -> Result<LabStats> {
+    let path = db.output_path(id, Output::Colour);
+    Ok(LabStats::of(
+        &crate::synth::exemplar::read_image(&path)?.to_rgb8(),
+    ))
+}
+
+/// Built entry `id`'s colour texture graded by `grading`, made once into
+/// the entry's build folder (`graded/KEY.png`, named by a digest of the
+/// grading and of the pixels it starts from) and reused after.
+pub fn graded_colour(db: &Database, id: &str, grading: &Grading) -> Result<PathBuf> {
+    let source = db.output_path(id, Output::Colour);
+    let bytes = std::fs::read(&source).map_err(|e| Error::io(&source, e))?;
+    let mut digest = fnv1a(FNV_START, grading.key(id).as_bytes());
+    digest = fnv1a(digest, &bytes);
+    if let Some(m) = &grading.matched {
+        let target = db.output_path(m, Output::Colour);
+        digest = fnv1a(
+            digest,
+            &std::fs::read(&target).map_err(|e| Error::io(&target, e))?,
+        );
+    }
+    let path = db
+        .root
+        .join("build")
+        .join(id)
+        .join("graded")
+        .join(format!("{digest:016x}.png"));
+    if path.is_file() {
+        return Ok(path);
+    }
+    let img = crate::synth::exemplar::read_image(&source)?.to_rgb8();
+    let transfer = match &grading.matched {
+        Some(m) => Some((LabStats::of(&img), stats_of(db, m)?)),
+        None => None,
+    };
+    let graded = Grade {
+        hue: grading.hue,
+        saturation: grading.saturation,
+        brightness: grading.brightness,
+        transfer,
+    }
+    .apply(&img);
+    let dir = path.parent().expect("in a folder");
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    write_png(&path, &image::DynamicImage::ImageRgb8(graded))?;
+    Ok(path)
 }

@@ -5,15 +5,9 @@
 //! 2001: each channel's mean and spread moved onto the target's, here in
 //! CIELAB). Every step is per pixel, so a tileable texture stays tileable.
 
-use std::path::PathBuf;
-
 use palette::{FromColor, Lab, Srgb};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-
-use super::build::{FNV_START, fnv1a};
-use super::{Database, Output};
-use crate::error::{Error, Result};
 
 /// Mean and standard deviation of L*, a*, b* over a texture's pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -159,56 +153,6 @@ impl Grading {
         }
         key
     }
-}
-
-/// The colour statistics of built entry `id`'s colour texture.
-pub fn stats_of(db: &Database, id: &str) -> Result<LabStats> {
-    let path = db.output_path(id, Output::Colour);
-    Ok(LabStats::of(
-        &crate::synth::exemplar::read_image(&path)?.to_rgb8(),
-    ))
-}
-
-/// Built entry `id`'s colour texture graded by `grading`, made once into
-/// the entry's build folder (`graded/KEY.png`, named by a digest of the
-/// grading and of the pixels it starts from) and reused after.
-pub fn graded_colour(db: &Database, id: &str, grading: &Grading) -> Result<PathBuf> {
-    let source = db.output_path(id, Output::Colour);
-    let bytes = std::fs::read(&source).map_err(|e| Error::io(&source, e))?;
-    let mut digest = fnv1a(FNV_START, grading.key(id).as_bytes());
-    digest = fnv1a(digest, &bytes);
-    if let Some(m) = &grading.matched {
-        let target = db.output_path(m, Output::Colour);
-        digest = fnv1a(
-            digest,
-            &std::fs::read(&target).map_err(|e| Error::io(&target, e))?,
-        );
-    }
-    let path = db
-        .root
-        .join("build")
-        .join(id)
-        .join("graded")
-        .join(format!("{digest:016x}.png"));
-    if path.is_file() {
-        return Ok(path);
-    }
-    let img = crate::synth::exemplar::read_image(&source)?.to_rgb8();
-    let transfer = match &grading.matched {
-        Some(m) => Some((LabStats::of(&img), stats_of(db, m)?)),
-        None => None,
-    };
-    let graded = Grade {
-        hue: grading.hue,
-        saturation: grading.saturation,
-        brightness: grading.brightness,
-        transfer,
-    }
-    .apply(&img);
-    let dir = path.parent().expect("in a folder");
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    crate::atomic::write_png(&path, &image::DynamicImage::ImageRgb8(graded))?;
-    Ok(path)
 }
 
 #[cfg(test)]

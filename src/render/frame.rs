@@ -5,7 +5,7 @@ use glam::DVec3;
 
 use super::camera::OrbitCamera;
 use super::gpu_scene::GpuScene;
-use super::pipelines::Renderer;
+use super::pipelines::{GLOBALS_FLOATS, Renderer};
 use crate::scene::draw::LayerKind;
 
 /// Dark red-brown, as the inside of a body looks past the light.
@@ -15,9 +15,6 @@ const BACKGROUND: wgpu::Color = wgpu::Color {
     b: 0.002,
     a: 1.0,
 };
-
-/// The frame's uniform (frame.wgsl's `Globals`), in floats.
-pub(super) const GLOBALS_FLOATS: usize = 32;
 
 /// How a frame is lit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -84,7 +84,13 @@ fn shade(albedo: vec3<f32>, n_in: vec3<f32>, p: vec3<f32>, finish: Finish) -> ve
     let r = globals.eye.w / 4.0;
     let irradiance = globals.flags.w * cone * r * r / (d * d);
     let f0 = 0.02;
-    let coat = finish.coat * f0 * ggx_at_eye(cos_n, finish.coat_roughness);
+    // Specular anti-aliasing: where the normal turns within a pixel, the
+    // lobe widens by that turn (roughness^2 grows by its variance), so a
+    // glint smaller than a pixel is not a lone sparkling dot.
+    let dn = fwidth(n_in);
+    let widen = min(0.25 * dot(dn, dn), 0.02);
+    let coat_roughness = sqrt(sqrt(pow(finish.coat_roughness, 4.0) + widen));
+    let coat = finish.coat * f0 * ggx_at_eye(cos_n, coat_roughness);
     let sheen = 0.04 * ggx_at_eye(cos_n, finish.roughness);
     // Light scattered under the surface reaches a little past the
     // terminator (wrapped diffuse), so crevices turned from the scope are

@@ -106,6 +106,9 @@ fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// The frame's uniform (frame.wgsl's `Globals`), in floats.
+pub(super) const GLOBALS_FLOATS: usize = 32;
+
 fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
     device.create_sampler(&wgpu::SamplerDescriptor {
         address_mode_u: mode,
@@ -279,7 +282,7 @@ impl Renderer {
         });
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
-            size: 4 * super::frame::GLOBALS_FLOATS as u64,
+            size: 4 * GLOBALS_FLOATS as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });

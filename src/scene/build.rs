@@ -208,7 +208,7 @@ pub fn ensure_tissues(
     // Graded colours, each made once and kept beside its entry's build.
     for f in spec.nodes.iter().flat_map(|n| &n.facets) {
         if !f.grading.is_identity() {
-            let path = crate::db::colour::graded_colour(database, &f.texture, &f.grading)?;
+            let path = crate::db::build::graded_colour(database, &f.texture, &f.grading)?;
             tissues.colour.insert(f.colour_key(), path);
         }
     }

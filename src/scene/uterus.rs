@@ -95,6 +95,16 @@ pub struct Polyp {
     pub stalk_radius: f64,
     pub stalk_length: f64,
     pub head_radius: f64,
+    /// The head's height over its width: 1 a ball, more an ovoid.
+    #[serde(default = "one")]
+    pub elongation: f64,
+    /// Seeded lobes round the head, a fraction of its radius; 0 round.
+    #[serde(default)]
+    pub irregularity: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// A cavity with two myomas and a fundal polyp (what `organtex generate
@@ -128,6 +138,8 @@ pub fn demo() -> CavityParams {
             stalk_radius: 0.8,
             stalk_length: 3.0,
             head_radius: 2.2,
+            elongation: 1.0,
+            irregularity: 0.0,
         }],
     }
 }
@@ -327,7 +339,7 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
     for (k, site) in sites.iter().enumerate().skip(p.myomas.len()) {
         let pl = &p.polyps[k - p.myomas.len()];
         let span = cavity_span(&original, &sphere.triangles, site);
-        let rise = pl.stalk_length + 2.0 * pl.head_radius;
+        let rise = pl.stalk_length + 2.0 * pl.head_radius * pl.elongation;
         if rise > 0.6 * span {
             return Err(bad(
                 site.key.clone(),
@@ -346,6 +358,7 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
             (k + 1) as u32,
             site,
             pl,
+            rng::hash(p.seed, &[0x9017, k as u64]),
         )
         .map_err(|msg| bad(site.key.clone(), msg))?;
         heights.resize(positions.len(), 1.0);
@@ -546,6 +559,19 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
         positive(format!("polyp[{i}].stalk_radius"), pl.stalk_radius)?;
         positive(format!("polyp[{i}].stalk_length"), pl.stalk_length)?;
         positive(format!("polyp[{i}].head_radius"), pl.head_radius)?;
+        if !(0.5..=3.0).contains(&pl.elongation) {
+            return Err(bad(
+                format!("polyp[{i}].elongation"),
+                format!("must be from 0.5 to 3, not {}", pl.elongation),
+            ));
+        }
+        // Lobes past 0.3 of the radius could fold the head's surface.
+        if !(0.0..=0.3).contains(&pl.irregularity) {
+            return Err(bad(
+                format!("polyp[{i}].irregularity"),
+                format!("must be from 0 to 0.3, not {}", pl.irregularity),
+            ));
+        }
         if pl.stalk_radius >= pl.head_radius {
             return Err(bad(
                 format!("polyp[{i}].stalk_radius"),
@@ -678,8 +704,15 @@ fn grow_polyp(
     facet: u32,
     site: &Site,
     pl: &Polyp,
+    seed: u64,
 ) -> Result<(), String> {
     let (e1, e2) = tangent_frame(site.normal);
+    // The head's lobes: two seeded harmonics round the axis.
+    let lobe = |k: u64| TAU * (rng::hash(seed, &[k]) % 1000) as f64 / 1000.0;
+    let (phase2, phase3) = (lobe(2), lobe(3));
+    let lobes = |a: f64| {
+        1.0 + pl.irregularity * (0.6 * (2.0 * a + phase2).cos() + 0.4 * (3.0 * a + phase3).cos())
+    };
     let inside = |p: DVec3| {
         let d = p - site.centre;
         let flat = d - site.normal * d.dot(site.normal);
@@ -763,6 +796,8 @@ fn grow_polyp(
         let along = total * (1.0 - k as f64 / rings as f64);
         let (r, h) = profile.point(along);
         let ease = smoothstep(foot, total, along);
+        // Full lobes on the head, none from the stalk down.
+        let on_head = 1.0 - smoothstep(0.5 * foot, foot, along);
         let count = ((TAU * r / size).round() as usize).clamp(6, n.max(6));
         let angles: Vec<f64> = (0..count).map(|j| TAU * j as f64 / count as f64).collect();
         let ids: Vec<u32> = angles
@@ -770,6 +805,7 @@ fn grow_polyp(
             .map(|&a| {
                 let (dr, dh) = rim_at(a);
                 let a = start + turn * a;
+                let r = r * (1.0 + (lobes(a) - 1.0) * on_head);
                 positions.push(
                     site.centre
                         + (e1 * a.cos() + e2 * a.sin()) * (r + dr * ease)
@@ -880,19 +916,21 @@ impl Profile {
     }
 }
 
-/// Head top, round head down to where it meets the stalk, the stalk, then a
-/// quarter-round fillet out to the footprint's rim on the wall. A simple
-/// curve in the half-plane r >= 0, so the surface it sweeps is embedded.
+/// Head top, the head (a half ellipse, `elongation` times as high as
+/// wide) down to where it meets the stalk, the stalk, then a quarter-round
+/// fillet out to the footprint's rim on the wall. A simple curve in the
+/// half-plane r >= 0, so the surface it sweeps is embedded.
 fn polyp_profile(pl: &Polyp, footprint: f64) -> Profile {
     let (rh, rs) = (pl.head_radius, pl.stalk_radius);
     let fillet = rs.min(0.5 * pl.stalk_length);
     let neck = pl.stalk_length;
-    let centre = neck + (rh * rh - rs * rs).sqrt();
+    let tall = rh * pl.elongation;
+    let centre = neck + tall * (1.0 - (rs / rh).powi(2)).sqrt();
     let end = -((rh * rh - rs * rs).sqrt() / rh).asin();
     let mut points = Vec::new();
     for k in 0..=60 {
         let a = PI / 2.0 + (end - PI / 2.0) * k as f64 / 60.0;
-        points.push((rh * a.cos(), centre + rh * a.sin()));
+        points.push((rh * a.cos(), centre + tall * a.sin()));
     }
     points.push((rs, fillet));
     let foot_index = points.len() - 1;

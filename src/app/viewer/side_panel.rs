@@ -40,25 +40,18 @@ impl Viewer {
         ui.separator();
         ui.label("Show");
         let before = self.layers;
-        ui.checkbox(&mut self.layers.seam_blend, "seam blend");
-        ui.checkbox(&mut self.layers.bump, "bump");
-        ui.checkbox(&mut self.layers.overlay, "overlay");
-        ui.checkbox(&mut self.layers.wireframe, "wireframe");
-        ui.checkbox(&mut self.layers.seams, "seams");
-        ui.checkbox(&mut self.layers.heat, "distortion");
+        // Two a row, so the cut plane and carving below stay in view.
         ui.horizontal(|ui| {
-            ui.label("Lighting:");
-            for l in crate::render::Lighting::ALL {
-                ui.selectable_value(&mut self.layers.lighting, l, l.name())
-                    .on_hover_text(match l {
-                        crate::render::Lighting::Endoscope => {
-                            "the scope's light: falls off with distance, wet highlights"
-                        }
-                        crate::render::Lighting::Even => {
-                            "an even light, for judging the texture alone"
-                        }
-                    });
-            }
+            ui.checkbox(&mut self.layers.seam_blend, "seam blend");
+            ui.checkbox(&mut self.layers.bump, "bump");
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.layers.overlay, "overlay");
+            ui.checkbox(&mut self.layers.wireframe, "wireframe");
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.layers.seams, "seams");
+            ui.checkbox(&mut self.layers.heat, "distortion");
         });
         if self.layers != before {
             self.touch();

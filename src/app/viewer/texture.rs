@@ -65,35 +65,40 @@ impl Viewer {
         s: &crate::scene::file::FacetSettings,
     ) {
         let mut g = s.grading.clone();
-        ui.label("Colour");
         let mut changed = false;
-        changed |= ui
-            .add(egui::Slider::new(&mut g.hue, -60.0..=60.0).text("hue °"))
-            .changed();
-        changed |= ui
-            .add(egui::Slider::new(&mut g.saturation, 0.0..=2.0).text("saturation"))
-            .changed();
-        changed |= ui
-            .add(egui::Slider::new(&mut g.brightness, 0.25..=2.0).text("brightness"))
-            .changed();
-        let colours: Vec<String> = self
-            .tissues
-            .iter()
-            .filter(|e| e.tissue.outputs.contains(&crate::db::Output::Colour))
-            .map(|e| e.tissue.id.clone())
-            .collect();
-        egui::ComboBox::from_label("match")
-            .selected_text(g.matched.as_deref().unwrap_or("none"))
-            .show_ui(ui, |ui| {
-                changed |= ui.selectable_value(&mut g.matched, None, "none").changed();
-                for id in colours {
-                    changed |= ui
-                        .selectable_value(&mut g.matched, Some(id.clone()), id)
-                        .changed();
-                }
-            })
-            .response
-            .on_hover_text("take on that tissue's colour statistics (mean and spread in CIELAB)");
+        // Folded by default: the side panel stays short enough for the
+        // cut plane and carving controls below.
+        egui::CollapsingHeader::new("Colour").show(ui, |ui| {
+            changed |= ui
+                .add(egui::Slider::new(&mut g.hue, -60.0..=60.0).text("hue °"))
+                .changed();
+            changed |= ui
+                .add(egui::Slider::new(&mut g.saturation, 0.0..=2.0).text("saturation"))
+                .changed();
+            changed |= ui
+                .add(egui::Slider::new(&mut g.brightness, 0.25..=2.0).text("brightness"))
+                .changed();
+            let colours: Vec<String> = self
+                .tissues
+                .iter()
+                .filter(|e| e.tissue.outputs.contains(&crate::db::Output::Colour))
+                .map(|e| e.tissue.id.clone())
+                .collect();
+            egui::ComboBox::from_label("match")
+                .selected_text(g.matched.as_deref().unwrap_or("none"))
+                .show_ui(ui, |ui| {
+                    changed |= ui.selectable_value(&mut g.matched, None, "none").changed();
+                    for id in colours {
+                        changed |= ui
+                            .selectable_value(&mut g.matched, Some(id.clone()), id)
+                            .changed();
+                    }
+                })
+                .response
+                .on_hover_text(
+                    "take on that tissue's colour statistics (mean and spread in CIELAB)",
+                );
+        });
         if changed && let Some(doc) = &mut self.doc {
             let mut now = s.clone();
             now.grading = g;

@@ -38,6 +38,23 @@ impl Viewer {
                 self.bake();
             }
             ui.separator();
+            ui.label("Lighting:");
+            for l in crate::render::Lighting::ALL {
+                let hint = match l {
+                    crate::render::Lighting::Endoscope => {
+                        "the scope's light: falls off with distance, wet highlights"
+                    }
+                    crate::render::Lighting::Even => "an even light, for judging the texture alone",
+                };
+                if ui
+                    .selectable_value(&mut self.layers.lighting, l, l.name())
+                    .on_hover_text(hint)
+                    .changed()
+                {
+                    self.touch();
+                }
+            }
+            ui.separator();
             let running = self.jobs.shown();
             for job in &running {
                 let (what, fraction) = job.status();

@@ -489,39 +489,11 @@ fn the_default_preview_looks_lit_by_an_endoscope() {
         .collect();
     let total = (w * h) as f64;
     let fraction = bright.iter().filter(|&&b| b).count() as f64 / total;
-    let mut seen = vec![false; bright.len()];
-    let mut spots = Vec::new();
-    for start in 0..bright.len() {
-        if !bright[start] || seen[start] {
-            continue;
-        }
-        let (mut stack, mut size) = (vec![start], 0usize);
-        seen[start] = true;
-        while let Some(i) = stack.pop() {
-            size += 1;
-            let (x, y) = ((i % w as usize) as i64, (i / w as usize) as i64);
-            for (dx, dy) in [
-                (-1, -1),
-                (0, -1),
-                (1, -1),
-                (-1, 0),
-                (1, 0),
-                (-1, 1),
-                (0, 1),
-                (1, 1),
-            ] {
-                let (nx, ny) = (x + dx, y + dy);
-                if nx >= 0 && ny >= 0 && nx < w as i64 && ny < h as i64 {
-                    let j = ny as usize * w as usize + nx as usize;
-                    if bright[j] && !seen[j] {
-                        seen[j] = true;
-                        stack.push(j);
-                    }
-                }
-            }
-        }
-        spots.push(size as f64 / total);
-    }
+    let mut spots: Vec<f64> =
+        organtex::synth::components::components(&bright, w as usize, h as usize, true)
+            .iter()
+            .map(|c| c.cells.len() as f64 / total)
+            .collect();
     spots.sort_by(f64::total_cmp);
     let median_spot = spots.get(spots.len() / 2).copied().unwrap_or(0.0);
     let largest = spots.last().copied().unwrap_or(0.0);

@@ -73,13 +73,19 @@ def check_glb(glb, report, failures):
 
 
 def check_json(glb, report, failures):
-    """One node per facet, and what trimesh does not expose: texture
-    transforms and vertex alpha."""
+    """One mesh node per facet, a camera node per scene camera (the first
+    with the scope's spot light), and what trimesh does not expose:
+    texture transforms and vertex alpha."""
     doc = read_json(glb)
-    nodes = sorted(n["name"] for n in doc["nodes"])
+    nodes = sorted(n["name"] for n in doc["nodes"] if "mesh" in n)
     expected = sorted(f"{f['node']}/{f['facet']}" for f in report["facets"])
     if nodes != expected:
-        failures.append(f"{glb}: nodes {nodes}, report facets {expected}")
+        failures.append(f"{glb}: mesh nodes {nodes}, report facets {expected}")
+    cameras = [n for n in doc["nodes"] if "camera" in n]
+    if cameras:
+        lights = doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
+        if cameras[0].get("extensions", {}).get("KHR_lights_punctual", {}).get("light") != 0 or not lights:
+            failures.append(f"{glb}: the first camera carries no scope light")
     if report["mode"] == "layered":
         if "KHR_texture_transform" not in doc.get("extensionsUsed", []):
             failures.append(f"{glb}: layered bake without KHR_texture_transform")

@@ -65,19 +65,21 @@ impl Viewer {
         s: &crate::scene::file::FacetSettings,
     ) {
         let mut g = s.grading.clone();
-        let mut changed = false;
+        // A slider's value is kept as it moves; the texture is graded once
+        // it is let go (each grading writes a texture into the database's
+        // build folder).
+        let (mut changed, mut regrade) = (false, false);
         // Folded by default: the side panel stays short enough for the
         // cut plane and carving controls below.
         egui::CollapsingHeader::new("Colour").show(ui, |ui| {
-            changed |= ui
-                .add(egui::Slider::new(&mut g.hue, -60.0..=60.0).text("hue °"))
-                .changed();
-            changed |= ui
-                .add(egui::Slider::new(&mut g.saturation, 0.0..=2.0).text("saturation"))
-                .changed();
-            changed |= ui
-                .add(egui::Slider::new(&mut g.brightness, 0.25..=2.0).text("brightness"))
-                .changed();
+            for r in [
+                ui.add(egui::Slider::new(&mut g.hue, -60.0..=60.0).text("hue °")),
+                ui.add(egui::Slider::new(&mut g.saturation, 0.0..=2.0).text("saturation")),
+                ui.add(egui::Slider::new(&mut g.brightness, 0.25..=2.0).text("brightness")),
+            ] {
+                changed |= r.changed();
+                regrade |= r.drag_stopped() || (r.changed() && !r.dragged());
+            }
             let colours: Vec<String> = self
                 .tissues
                 .iter()
@@ -87,9 +89,9 @@ impl Viewer {
             egui::ComboBox::from_label("match")
                 .selected_text(g.matched.as_deref().unwrap_or("none"))
                 .show_ui(ui, |ui| {
-                    changed |= ui.selectable_value(&mut g.matched, None, "none").changed();
+                    regrade |= ui.selectable_value(&mut g.matched, None, "none").changed();
                     for id in colours {
-                        changed |= ui
+                        regrade |= ui
                             .selectable_value(&mut g.matched, Some(id.clone()), id)
                             .changed();
                     }
@@ -99,11 +101,13 @@ impl Viewer {
                     "take on that tissue's colour statistics (mean and spread in CIELAB)",
                 );
         });
-        if changed && let Some(doc) = &mut self.doc {
+        if (changed || regrade)
+            && let Some(doc) = &mut self.doc
+        {
             let mut now = s.clone();
             now.grading = g;
             doc.set_settings(f, now);
-            if doc.baked.is_some() {
+            if regrade && doc.baked.is_some() {
                 self.rebuild_tissues();
             }
         }

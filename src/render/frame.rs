@@ -7,6 +7,7 @@ use super::camera::OrbitCamera;
 use super::gpu_scene::GpuScene;
 use super::pipelines::{GLOBALS_FLOATS, Renderer};
 use crate::scene::draw::LayerKind;
+pub use crate::scene::file::Lighting;
 
 /// Dark red-brown, as the inside of a body looks past the light.
 const BACKGROUND: wgpu::Color = wgpu::Color {
@@ -15,29 +16,6 @@ const BACKGROUND: wgpu::Color = wgpu::Color {
     b: 0.002,
     a: 1.0,
 };
-
-/// How a frame is lit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Lighting {
-    /// The scope's light at the camera: a spot light falling off with the
-    /// square of the distance, wet highlights, tone mapped.
-    #[default]
-    Endoscope,
-    /// An even light at the camera, no highlights: for judging a texture
-    /// alone.
-    Even,
-}
-
-impl Lighting {
-    pub const ALL: [Lighting; 2] = [Lighting::Endoscope, Lighting::Even];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Lighting::Endoscope => "endoscope",
-            Lighting::Even => "even",
-        }
-    }
-}
 
 /// What a frame shows.
 #[derive(Clone, Copy, Debug, PartialEq)]

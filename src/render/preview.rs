@@ -5,7 +5,6 @@ use super::{Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, V
 use crate::error::Result;
 use crate::scene::build::BakedScene;
 use crate::scene::draw::DrawList;
-use crate::scene::file::PreviewLighting;
 
 /// `scene` drawn from its camera, `size` pixels, every layer on, lit and
 /// framed as its `[bake]` settings ask (`preview_lighting`,
@@ -17,11 +16,7 @@ pub fn preview(
     list: &DrawList,
     size: [u32; 2],
 ) -> Result<image::RgbImage> {
-    let lighting = match scene.spec.bake.preview_lighting {
-        PreviewLighting::Endoscope => Lighting::Endoscope,
-        PreviewLighting::Even => Lighting::Even,
-    };
-    let mut picture = picture(gpu, scene, list, size, lighting)?;
+    let mut picture = picture(gpu, scene, list, size, scene.spec.bake.preview_lighting)?;
     if scene.spec.bake.preview_scope {
         scope_field(&mut picture);
     }

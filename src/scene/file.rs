@@ -238,24 +238,40 @@ pub struct BakeSettings {
     /// The preview's light: "endoscope" (the scope's spot light, wet
     /// highlights) or "even" (for judging the textures alone).
     #[serde(default, skip_serializing_if = "is_endoscope")]
-    pub preview_lighting: PreviewLighting,
+    pub preview_lighting: Lighting,
     /// The preview seen through the scope: its circular field, dark past
     /// the rim, with the lens's vignetting.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub preview_scope: bool,
 }
 
-/// How the bake's preview is lit (`render::Lighting`).
+/// How a frame is lit: the bake's preview (`[bake] preview_lighting`), and
+/// the viewer's choice.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum PreviewLighting {
+pub enum Lighting {
+    /// The scope's light at the camera: a spot light falling off with the
+    /// square of the distance, wet highlights, tone mapped.
     #[default]
     Endoscope,
+    /// An even light at the camera, no highlights: for judging a texture
+    /// alone.
     Even,
 }
 
-fn is_endoscope(l: &PreviewLighting) -> bool {
-    *l == PreviewLighting::Endoscope
+impl Lighting {
+    pub const ALL: [Lighting; 2] = [Lighting::Endoscope, Lighting::Even];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Lighting::Endoscope => "endoscope",
+            Lighting::Even => "even",
+        }
+    }
+}
+
+fn is_endoscope(l: &Lighting) -> bool {
+    *l == Lighting::Endoscope
 }
 
 fn default_band() -> usize {
@@ -274,7 +290,7 @@ impl Default for BakeSettings {
             seam_band: default_band(),
             views: default_views(),
             interior_voxels: default_interior_voxels(),
-            preview_lighting: PreviewLighting::default(),
+            preview_lighting: Lighting::default(),
             preview_scope: false,
         }
     }

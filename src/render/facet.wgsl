@@ -2,8 +2,8 @@
 // texture through the material's texture transform (KHR_texture_transform),
 // tangent-space bump from the normal map, blend weight per vertex, lit by
 // the scope's light as an endoscope lights what it sees (frame.wgsl's
-// shade, prepended with the globals), the wet film's highlights broken up
-// where the bump folds the surface. Also the distortion heat map and the
+// shade_wet, prepended with the globals), the wet film glinting where its
+// relief faces the scope. Also the distortion heat map and the
 // wireframe and seam lines, from the same vertices.
 
 struct Material {
@@ -98,28 +98,40 @@ fn heat_colour(h: f32) -> vec3<f32> {
     return mix(vec3<f32>(1.0), vec3<f32>(1.0, 0.1, 0.05), t);
 }
 
+// The film's relief as a multiple of the tissue's: the light a wet
+// surface reflects sees every facet of its relief, the light the tissue
+// scatters back sees it softened (frame.wgsl's shade_wet), so the bump a
+// facet asks for is what its diffuse light shows.
+const FILM_RELIEF: f32 = 5.0;
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if hidden(in.world) {
         discard;
     }
     var n = normalize(in.normal);
+    var n_film = n;
     var finish = Finish(material.normal.y, material.normal.z, material.normal.w);
     if globals.flags.x > 0.5 && material.normal.x > 0.0 {
         let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
         let b = cross(n, t) * in.tangent.w;
         let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
-        let m_scaled = vec3<f32>(m.xy * material.normal.x, m.z);
-        n = normalize(t * m_scaled.x + b * m_scaled.y + n * m_scaled.z);
-        // The film pools smooth on the flats and breaks on the folds.
-        let fold = smoothstep(0.5, 1.0, length(m_scaled.xy));
-        finish.coat_roughness = mix(finish.coat_roughness, 0.6, fold);
+        let bump = material.normal.x;
+        n_film = normalize(t * (m.x * bump * FILM_RELIEF) + b * (m.y * bump * FILM_RELIEF) + n * m.z);
+        n = normalize(t * (m.x * bump) + b * (m.y * bump) + n * m.z);
+        // Where the relief varies within a texel of the mip level sampled,
+        // the averaged normal is shorter: its variance widens the film's
+        // lobe (Toksvig 2005), so distant relief glistens as a sheen, not
+        // as sparkling dots.
+        let len = length(m);
+        let variance = pow(bump * FILM_RELIEF, 2.0) * max(1.0 - len, 0.0) / max(len, 1e-3);
+        finish.coat_roughness = sqrt(sqrt(pow(finish.coat_roughness, 4.0) + variance));
     }
     if globals.flags.y > 0.5 {
         return vec4<f32>(heat_colour(in.heat) * headlamp(n, in.world), 1.0);
     }
     let c = textureSample(colour_texture, colour_sampler, in.uv) * material.factor;
-    return vec4<f32>(shade(c.rgb, n, in.world, finish), c.a * in.alpha);
+    return vec4<f32>(shade_wet(c.rgb, n, n_film, in.world, finish), c.a * in.alpha);
 }
 
 // Lines sit a little towards the eye so the faces they border do not hide

@@ -41,6 +41,11 @@ struct Finish {
 
 const PI: f32 = 3.14159265;
 
+// The radius of the scope's light, the ring of fibres round a
+// hysteroscope's lens, as a fraction of the view's typical depth (the
+// camera's distance to what it looks at): 1.5 mm at 36 mm.
+const SCOPE_LIGHT_RADIUS: f32 = 0.04;
+
 // GGX (Trowbridge-Reitz) specular lobe times Smith's masking, for light
 // and view from one point (the scope's light sits at its lens, so the
 // half vector is the view direction): D G / (4 n.l n.v) with n.l = n.v.
@@ -55,9 +60,18 @@ fn ggx_at_eye(cos_n: f32, roughness: f32) -> f32 {
 }
 
 // Filmic tone curve (Narkowicz's fit of ACES), so that highlights
-// saturate to white and the near wall does not clip flat.
+// saturate and the near wall does not clip flat.
+fn tone_curve(x: f32) -> f32 {
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+
+// The tone curve on the brightest channel, the others scaled with it: a
+// bright near wall keeps the tissue's hue instead of fading to white
+// channel by channel; only where the film's white reflection dominates
+// does a pixel go white.
 fn tone_map(x: vec3<f32>) -> vec3<f32> {
-    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+    let peak = max(max(x.r, x.g), max(x.b, 1e-6));
+    return x * (tone_curve(peak) / peak);
 }
 
 // Linear colour of a surface of linear `albedo` at `p` with unit normal
@@ -66,15 +80,28 @@ fn tone_map(x: vec3<f32>) -> vec3<f32> {
 // distance; Lambertian tissue under a clear coat whose Fresnel
 // reflectance at normal incidence is 0.02 (water, n = 1.33), the light
 // the coat reflects lost to the tissue below. Even: `headlamp`.
-fn shade(albedo: vec3<f32>, n_in: vec3<f32>, p: vec3<f32>, finish: Finish) -> vec3<f32> {
+fn shade(albedo: vec3<f32>, n: vec3<f32>, p: vec3<f32>, finish: Finish) -> vec3<f32> {
+    return shade_wet(albedo, n, n, p, finish);
+}
+
+// `shade` with the fine relief seen twice: the film on top follows it
+// sharply (`n_film`), while the tissue's diffuse light, scattered under
+// the surface before it leaves, shows it softened (`n_tissue`), as
+// renderers of skin soften the normal map for the diffuse term (d'Eon and
+// Luebke, GPU Gems 3, ch. 14). The even light takes the tissue's.
+fn shade_wet(albedo: vec3<f32>, n_tissue: vec3<f32>, n_film: vec3<f32>, p: vec3<f32>, finish: Finish) -> vec3<f32> {
     if globals.flags.z < 0.5 {
-        return albedo * headlamp(n_in, p);
+        return albedo * headlamp(n_tissue, p);
     }
     let to_eye = globals.eye.xyz - p;
     let d = max(length(to_eye), 1e-6);
     let l = to_eye / d;
-    let n = select(n_in, -n_in, dot(n_in, l) < 0.0);
-    let cos_n = max(dot(n, l), 0.0);
+    // Both normals turned to the eye by the side the tissue's (the
+    // smoother) normal faces: where the relief tilts the film's normal
+    // past the horizon, that facet faces away, it is not the back face.
+    let side = select(1.0, -1.0, dot(n_tissue, l) < 0.0);
+    let cos_n = max(side * dot(n_film, l), 0.0);
+    let cos_t = max(side * dot(n_tissue, l), 0.0);
     // The cone (draw::scope_cone): full inside the inner angle, whose
     // cosine is halfway from the outer's to 1, none past the outer.
     let off_axis = dot(-l, globals.scope.xyz);
@@ -84,22 +111,36 @@ fn shade(albedo: vec3<f32>, n_in: vec3<f32>, p: vec3<f32>, finish: Finish) -> ve
     let r = globals.eye.w / 4.0;
     let irradiance = globals.flags.w * cone * r * r / (d * d);
     let f0 = 0.02;
-    // Specular anti-aliasing: where the normal turns within a pixel, the
-    // lobe widens by that turn (roughness^2 grows by its variance), so a
-    // glint smaller than a pixel is not a lone sparkling dot.
-    let dn = fwidth(n_in);
-    let widen = min(0.25 * dot(dn, dn), 0.02);
-    let coat_roughness = sqrt(sqrt(pow(finish.coat_roughness, 4.0) + widen));
-    let coat = finish.coat * f0 * ggx_at_eye(cos_n, coat_roughness);
-    let sheen = 0.04 * ggx_at_eye(cos_n, finish.roughness);
+    // The lobe's width (GGX alpha squared) from three sources: the coat's
+    // roughness; specular anti-aliasing, where the normal turns within a
+    // pixel (alpha^2 grows by that turn's variance, so a glint smaller than
+    // a pixel is not a lone sparkling dot); and the light's own size, its
+    // fibre bundle seen from the surface, which widens a sharp reflection
+    // into the bundle's image at the same energy (Karis 2013, sphere
+    // lights: alpha grows by the source's radius over twice the distance).
+    let dn = fwidth(n_film);
+    let widen = min(0.25 * dot(dn, dn), 0.002);
+    let source = SCOPE_LIGHT_RADIUS * globals.eye.w / (2.0 * d);
+    let coat_roughness = sqrt(sqrt(pow(finish.coat_roughness, 4.0) + widen + source * source));
+    // Specular radiance is the BRDF times the irradiance; the diffuse
+    // term below is albedo times irradiance (the Lambertian 1/pi folded
+    // into the exposure, as the .glb's light intensity shows), so the
+    // lobes take the pi back.
+    let coat = PI * finish.coat * f0 * ggx_at_eye(cos_n, coat_roughness);
+    let sheen = PI * 0.04 * ggx_at_eye(cos_n, finish.roughness);
     // Light scattered under the surface reaches a little past the
     // terminator (wrapped diffuse), so crevices turned from the scope are
     // dim, not black.
-    let wrapped = (cos_n + 0.3) / 1.3;
+    let wrapped = (cos_t + 0.3) / 1.3;
     let diffuse = albedo * (1.0 - finish.coat * f0) * wrapped;
     // A little light scattered round the cavity, so nothing is pure black.
     let ambient = 0.02 * globals.flags.w * albedo;
-    return tone_map(irradiance * (diffuse + cos_n * vec3<f32>(coat + sheen)) + ambient);
+    let tissue = irradiance * diffuse + ambient;
+    let film = irradiance * cos_n * (coat + sheen);
+    // The film's reflection is white light over the tissue's colour: it
+    // goes on top (screen), so a glint is white however pink the tissue.
+    let under = tone_map(tissue);
+    return under + (1.0 - under) * tone_curve(film);
 }
 
 // Cut and carved faces: fresh tissue, wet but without the mucus film.

@@ -471,6 +471,27 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     assert!(materials.iter().all(|m| {
         m["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"].as_f64() > Some(0.0)
     }));
+    // Where a tissue has relief, the film has it too, sharper, through the
+    // same normal map and texture transform.
+    let mut relief = 0;
+    for m in materials {
+        let Some(scale) = m["normalTexture"]["scale"].as_f64() else {
+            continue;
+        };
+        let film = &m["extensions"]["KHR_materials_clearcoat"]["clearcoatNormalTexture"];
+        assert_eq!(film["index"], m["normalTexture"]["index"], "{}", m["name"]);
+        let ratio = film["scale"].as_f64().unwrap() / scale;
+        assert!(
+            (ratio - organtex::scene::draw::FILM_RELIEF).abs() < 1e-6,
+            "{ratio}"
+        );
+        assert_eq!(
+            film["extensions"]["KHR_texture_transform"],
+            m["normalTexture"]["extensions"]["KHR_texture_transform"]
+        );
+        relief += 1;
+    }
+    assert!(relief > 0, "some tissue has relief");
     for used in [
         "KHR_lights_punctual",
         "KHR_materials_clearcoat",
@@ -583,7 +604,11 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
 /// Everything of a .glb but the texture transforms.
 fn without_transforms(mut json: serde_json::Value) -> serde_json::Value {
     for m in json["materials"].as_array_mut().unwrap() {
-        for slot in ["/pbrMetallicRoughness/baseColorTexture", "/normalTexture"] {
+        for slot in [
+            "/pbrMetallicRoughness/baseColorTexture",
+            "/normalTexture",
+            "/extensions/KHR_materials_clearcoat/clearcoatNormalTexture",
+        ] {
             if let Some(info) = m.pointer_mut(slot) {
                 info["extensions"]["KHR_texture_transform"] = serde_json::Value::Null;
             }

@@ -98,11 +98,7 @@ fn heat_colour(h: f32) -> vec3<f32> {
     return mix(vec3<f32>(1.0), vec3<f32>(1.0, 0.1, 0.05), t);
 }
 
-// The film's relief as a multiple of the tissue's: the light a wet
-// surface reflects sees every facet of its relief, the light the tissue
-// scatters back sees it softened (frame.wgsl's shade_wet), so the bump a
-// facet asks for is what its diffuse light shows.
-const FILM_RELIEF: f32 = 5.0;
+// FILM_RELIEF (scene::draw::FILM_RELIEF) is prepended with the globals.
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {

@@ -130,7 +130,11 @@ fn sampler(device: &wgpu::Device, mode: wgpu::AddressMode) -> wgpu::Sampler {
 pub(crate) fn shader_sources() -> [String; 3] {
     let frame = include_str!("frame.wgsl");
     [
-        format!("{frame}\n{}", include_str!("facet.wgsl")),
+        format!(
+            "const FILM_RELIEF: f32 = {:?};\n{frame}\n{}",
+            crate::scene::draw::FILM_RELIEF as f32,
+            include_str!("facet.wgsl")
+        ),
         format!(
             "{frame}\n{}\n{}\n{}",
             crate::solid::SAMPLE_BLOCK_WGSL,

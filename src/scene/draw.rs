@@ -175,6 +175,13 @@ fn box_blur_periodic(z: &[f64], w: usize, h: usize, r: i64) -> Vec<f64> {
 /// tone curve; the .glb's spot light's intensity).
 pub const SCOPE_EXPOSURE: f64 = 1.1;
 
+/// The wet film's relief as a multiple of the tissue's: the light a wet
+/// surface reflects sees every facet of its relief, the light the tissue
+/// scatters back sees it softened, so a facet's `bump` is what its diffuse
+/// light shows and the film (the renderer's clear coat, the .glb's
+/// clearcoat normal map) shows this many times more.
+pub const FILM_RELIEF: f64 = 5.0;
+
 /// The scope's light cone for a view `fov` degrees high and `aspect` wide
 /// to high: (outer, inner) half angles in radians. It reaches a little
 /// past the picture's corners and is full within the inner angle.

@@ -248,6 +248,7 @@ fn info(texture: json::Index<json::Texture>, transform: Option<&Transform>) -> j
 /// The glTF material of `m`.
 fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>> {
     let colour = b.texture(&m.colour)?;
+    let mut film_normal = None;
     let normal = match &m.normal {
         Some(n) => {
             let index = b.texture(&n.texture)?;
@@ -258,6 +259,15 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
                     serde_json::to_value(khr(t)).expect("serialises"),
                 );
             }
+            // The film sees the same relief, sharper (draw::FILM_RELIEF).
+            let mut film = serde_json::json!({
+                "index": index.value(),
+                "scale": n.scale as f64 * super::draw::FILM_RELIEF,
+            });
+            if !others.others.is_empty() {
+                film["extensions"] = serde_json::to_value(&others.others).expect("serialises");
+            }
+            film_normal = Some(film);
             Some(json::material::NormalTexture {
                 index,
                 scale: n.scale,
@@ -290,22 +300,28 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
         occlusion_texture: None,
         emissive_texture: None,
         emissive_factor: json::material::EmissiveFactor([0.0; 3]),
-        extensions: clearcoat(&m.finish),
+        extensions: clearcoat(&m.finish, film_normal),
         extras: Default::default(),
     }))
 }
 
-/// The wet film as KHR_materials_clearcoat, on a finish that has one.
-fn clearcoat(f: &crate::db::Finish) -> Option<json::extensions::material::Material> {
+/// The wet film as KHR_materials_clearcoat, on a finish that has one, with
+/// its own normal map (`film_normal`, a normalTextureInfo) where the
+/// tissue has relief.
+fn clearcoat(
+    f: &crate::db::Finish,
+    film_normal: Option<serde_json::Value>,
+) -> Option<json::extensions::material::Material> {
     (f.coat > 0.0).then(|| {
+        let mut coat = serde_json::json!({
+            "clearcoatFactor": f.coat,
+            "clearcoatRoughnessFactor": f.coat_roughness,
+        });
+        if let Some(n) = film_normal {
+            coat["clearcoatNormalTexture"] = n;
+        }
         let mut e = json::extensions::material::Material::default();
-        e.others.insert(
-            "KHR_materials_clearcoat".into(),
-            serde_json::json!({
-                "clearcoatFactor": f.coat,
-                "clearcoatRoughnessFactor": f.coat_roughness,
-            }),
-        );
+        e.others.insert("KHR_materials_clearcoat".into(), coat);
         e
     })
 }

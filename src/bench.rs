@@ -634,13 +634,13 @@ fn median(sorted: &[f64]) -> f64 {
 /// pixels back (so the GPU's work is inside the time).
 #[cfg(feature = "render")]
 fn frame_step(root: &Path) -> Result<Step> {
-    use crate::render::{Gpu, GpuScene, Layers, Offscreen, Renderer, View};
+    use crate::render::{Filtering, Gpu, GpuScene, Layers, Offscreen, Renderer, View};
     use crate::scene::draw::DrawList;
     let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
     let baked = crate::scene::build::build_scene(&spec, false, &Silent)?;
     let list = DrawList::of(&baked, None);
     let gpu = Gpu::headless()?;
-    let renderer = Renderer::new(&gpu.device);
+    let renderer = Renderer::new(&gpu.device, Filtering::for_frames(&gpu));
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list)?;
     let target = Offscreen::new(&gpu, &renderer, [960, 720]);
     let view = View {

@@ -7,7 +7,7 @@ use common::{changed_pixels, lit_pixels};
 use glam::DVec3;
 use organtex::progress::Silent;
 use organtex::render::{
-    CutMesh, Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, View,
+    CutMesh, Filtering, Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, View,
 };
 use organtex::scene::build::build_scene;
 use organtex::scene::draw::DrawList;
@@ -29,7 +29,7 @@ fn the_default_scene_renders_textured_and_every_layer_toggle_shows() {
     let spec = file::load(&repo("scenes/hysteroscopy_myomas.toml")).unwrap();
     let baked = build_scene(&spec, false, &Silent).unwrap();
     let list = DrawList::of(&baked, None);
-    let renderer = Renderer::new(&gpu.device);
+    let renderer = Renderer::new(&gpu.device, Filtering::for_frames(&gpu));
     let scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, &list).unwrap();
     let target = Offscreen::new(&gpu, &renderer, [320, 240]);
     let camera = OrbitCamera::for_scene(&spec.cameras, scene.bounds);
@@ -170,7 +170,7 @@ fn a_cut_face_shows_the_interior_block() {
         spacing: 1.0,
         voxels,
     };
-    let renderer = Renderer::new(&gpu.device);
+    let renderer = Renderer::new(&gpu.device, Filtering::for_frames(&gpu));
     let mut scene =
         GpuScene::new(&renderer, &gpu.device, &gpu.queue, &DrawList::default()).unwrap();
     let placement = Placement::new(lo, (hi - lo).x / 4.0 / n as f64).unwrap();
@@ -295,7 +295,7 @@ fn an_lst_cut_on_the_gpu_shows_the_cpu_colours() {
             .map(|i| [0, 1, 2].map(|c| organtex::rng::below(3, &[i, c], 256) as u8))
             .collect(),
     };
-    let renderer = Renderer::new(&gpu.device);
+    let renderer = Renderer::new(&gpu.device, Filtering::for_frames(&gpu));
     let decode = |c: f64| {
         let c = c / 255.0;
         if c <= 0.04045 {

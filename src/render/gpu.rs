@@ -24,6 +24,9 @@ pub struct Gpu {
     /// Whether a texture may be viewed in a format other than its own
     /// (sRGB pixels as plain bytes). GL adapters lack it.
     pub view_formats: bool,
+    /// A software adapter (llvmpipe, lavapipe): costly filtering is left
+    /// off where frames must be interactive.
+    pub software: bool,
     /// Errors raised outside any scope, oldest first.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -100,6 +103,7 @@ impl Gpu {
                 .get_downlevel_capabilities()
                 .flags
                 .contains(wgpu::DownlevelFlags::VIEW_FORMATS),
+            software: info.device_type == wgpu::DeviceType::Cpu,
             uncaptured,
         }
     }

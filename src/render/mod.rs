@@ -26,5 +26,5 @@ pub use frame::{Layers, Lighting, View};
 pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};
 pub use offscreen::Offscreen;
-pub use pipelines::Renderer;
+pub use pipelines::{Filtering, Renderer};
 pub use preview::{picture, preview, scope_field};

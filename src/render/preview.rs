@@ -1,7 +1,7 @@
 //! A baked scene's picture, offscreen: the bake's preview.png and
 //! `organtex view --screenshot` without a window.
 
-use super::{Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, View};
+use super::{Filtering, Gpu, GpuScene, Layers, Lighting, Offscreen, OrbitCamera, Renderer, View};
 use crate::error::Result;
 use crate::scene::build::BakedScene;
 use crate::scene::draw::DrawList;
@@ -52,7 +52,8 @@ pub fn picture(
     lighting: Lighting,
 ) -> Result<image::RgbImage> {
     gpu.scoped(|| {
-        let renderer = Renderer::new(&gpu.device);
+        // A still: worth the sharpest filtering whatever the adapter.
+        let renderer = Renderer::new(&gpu.device, Filtering::Sharp);
         let gpu_scene = GpuScene::new(&renderer, &gpu.device, &gpu.queue, list)?;
         let view = View {
             camera: OrbitCamera::for_scene(&scene.spec.cameras, gpu_scene.bounds),

@@ -34,7 +34,7 @@ use super::file_dialog::{FileDialog, Outcome, Purpose};
 use super::jobs::{Job, Running};
 use crate::db::Shelf;
 use crate::error::{Error, Result};
-use crate::render::{Gpu, GpuScene, Layers, OrbitCamera, Renderer};
+use crate::render::{Filtering, Gpu, GpuScene, Layers, OrbitCamera, Renderer};
 use crate::scene::build::{BakedScene, Tissues};
 use crate::scene::draw::DrawList;
 use crate::solid::Placement;
@@ -169,7 +169,7 @@ impl Viewer {
             .as_ref()
             .ok_or_else(|| Error::invalid("the viewer needs eframe's wgpu renderer"))?;
         let gpu = Gpu::from_parts(rs.device.clone(), rs.queue.clone(), &rs.adapter);
-        let renderer = Renderer::new(&gpu.device);
+        let renderer = Renderer::new(&gpu.device, Filtering::for_frames(&gpu));
         let mut viewer = Viewer {
             gpu,
             egui_renderer: rs.renderer.clone(),

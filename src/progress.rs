@@ -1,7 +1,8 @@
 //! Progress reporting and cancellation for long stages. The library calls
 //! these hooks; the CLI shows bars, the viewer shows its own bar and sets
 //! the cancel flag. Implementations must be cheap: stages call `advance`
-//! from worker threads.
+//! from worker threads. And where the time went: `Span`s, one per stage
+//! and item, for a bake's profile.
 
 use crate::error::{Error, Result};
 
@@ -36,4 +37,31 @@ impl Progress for CancelOnly<'_> {
     fn cancelled(&self) -> bool {
         self.0.cancelled()
     }
+}
+
+/// The wall-clock time one stage took on one item (a node, a facet), for a
+/// profile of where a long job's time goes.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Span {
+    pub stage: String,
+    /// What it worked on ("uterus", "uterus/wall"); empty for the whole job.
+    pub item: String,
+    pub seconds: f64,
+    /// Run beside other spans of the same stage (their seconds add up to
+    /// more than the stage's wall-clock time).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub parallel: bool,
+}
+
+/// `work`'s result, its time pushed onto `spans` as `stage` on `item`.
+pub fn timed<T>(spans: &mut Vec<Span>, stage: &str, item: &str, work: impl FnOnce() -> T) -> T {
+    let start = std::time::Instant::now();
+    let out = work();
+    spans.push(Span {
+        stage: stage.into(),
+        item: item.into(),
+        seconds: start.elapsed().as_secs_f64(),
+        parallel: false,
+    });
+    out
 }

@@ -1098,3 +1098,74 @@ fn a_scene_interior_can_be_morphed_from_photographed_cuts() {
         assert!(err.contains(message), "{err}");
     }
 }
+
+#[test]
+fn a_bake_profiles_every_stage_and_the_cli_prints_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_file(
+        dir.path(),
+        "small.toml",
+        &small_scene(0.0, 10.0, [0.0, 0.0]),
+    );
+    let out = dir.path().join("out");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_organtex"))
+        .args(["bake", "--profile", "-o"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let timings = &report["timings"];
+    let stages = timings["stages"].as_array().unwrap();
+    let has = |stage: &str, item: &str| {
+        stages
+            .iter()
+            .any(|s| s["stage"] == stage && s["item"] == item && s["seconds"].as_f64() >= Some(0.0))
+    };
+    for (stage, item) in [
+        ("tissues", "database"),
+        ("mesh", "uterus"),
+        ("visibility", "uterus"),
+        ("unwraps and bands", "uterus"),
+        ("unwrap", "uterus/wall"),
+        ("unwrap", "uterus/myoma-1"),
+        ("blending", "uterus"),
+        ("interior block", "uterus"),
+        ("contrast", ""),
+        ("glb", ""),
+        ("preview", ""),
+    ] {
+        assert!(has(stage, item), "no '{stage}' on '{item}' in {stages:?}");
+    }
+    // The unwraps run side by side; the stages one after another, within
+    // the bake's time.
+    assert!(
+        stages
+            .iter()
+            .filter(|s| s["stage"] == "unwrap")
+            .all(|s| s["parallel"] == true)
+    );
+    let sequential: f64 = stages
+        .iter()
+        .filter(|s| s["parallel"] != true)
+        .map(|s| s["seconds"].as_f64().unwrap())
+        .sum();
+    assert!(sequential <= timings["total_s"].as_f64().unwrap());
+    // The table: a row per stage and facet.
+    assert!(stdout.contains("where the time went"), "{stdout}");
+    for row in [
+        "unwrap (in parallel)",
+        "uterus/myoma-1",
+        "interior block",
+        "preview",
+    ] {
+        assert!(stdout.contains(row), "no '{row}' row in\n{stdout}");
+    }
+}

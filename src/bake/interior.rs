@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::progress::Progress;
+use crate::progress::{Progress, Span, timed};
 use crate::scene::build::BakedScene;
 use crate::scene::interior::{InteriorLine, LstLine, LstRegionLine, MorphLine, TetLine};
 use crate::solid::{InteriorMethod, interior_block};
@@ -16,15 +16,24 @@ use crate::synth::volume::Volume;
 /// Every node's interior block, synthesised from its tissue's colour
 /// texture (seed 004, 3.3) or layered exemplar (seed 002, 4.2),
 /// `[bake] interior_voxels` a side.
-pub(super) fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<Vec<Interior>> {
+/// Each step's time goes onto `spans`.
+pub(super) fn interiors(
+    scene: &BakedScene,
+    progress: &dyn Progress,
+    spans: &mut Vec<Span>,
+) -> Result<Vec<Interior>> {
     let n = scene.spec.bake.interior_voxels;
     let mut out = Vec::new();
     for (k, node) in scene.spec.nodes.iter().enumerate() {
         let Some(interior) = &node.interior else {
             continue;
         };
+        let name = node.name.as_str();
         if interior.method == InteriorMethod::Morph {
-            out.push(morphed(scene, k, interior, n, &out, progress)?);
+            let morph = timed(spans, "interior morph", name, || {
+                morphed(scene, k, interior, n, &out, progress)
+            })?;
+            out.push(morph);
             continue;
         }
         let built = scene.tissues.of(interior.method.output());
@@ -34,14 +43,16 @@ pub(super) fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<V
                 node.name, interior.texture
             ))
         })?;
-        let mut volume = interior_block(
-            texture,
-            &interior.photographs,
-            n,
-            interior.method,
-            k as u64,
-            progress,
-        )
+        let mut volume = timed(spans, "interior block", name, || {
+            interior_block(
+                texture,
+                &interior.photographs,
+                n,
+                interior.method,
+                k as u64,
+                progress,
+            )
+        })
         .map_err(|e| match e {
             // Ctrl-C is not the node's fault.
             Error::Cancelled => e,
@@ -51,21 +62,27 @@ pub(super) fn interiors(scene: &BakedScene, progress: &dyn Progress) -> Result<V
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let file = interior_file(&node.name, k, &out);
         let tets = if interior.tet_mesh || interior.lst.is_some() {
-            Some(tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)?)
+            Some(timed(spans, "tet mesh", name, || {
+                tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)
+            })?)
         } else {
             None
         };
         let lst = match (&interior.lst, &tets) {
-            (Some(spec), Some((_, tet_mesh))) => Some(lapped(
-                spec,
-                &scene.nodes[k].mesh,
-                tet_mesh,
-                interior.block_size,
-                &file,
-                k as u64,
-                &node.name,
-                progress,
-            )?),
+            (Some(spec), Some((_, tet_mesh))) => {
+                Some(timed(spans, "lapped solid texture", name, || {
+                    lapped(
+                        spec,
+                        &scene.nodes[k].mesh,
+                        tet_mesh,
+                        interior.block_size,
+                        &file,
+                        k as u64,
+                        &node.name,
+                        progress,
+                    )
+                })?)
+            }
             _ => None,
         };
         out.push(Interior {

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
-use crate::progress::{Progress, check};
+use crate::progress::{Progress, Span, check, timed};
 use crate::scene::atlas::{self, Atlas};
 use crate::scene::build::{BakedScene, FacetReport, build_scene};
 use crate::scene::contrast::{Colours, Contrast, contrast};
@@ -87,6 +87,9 @@ pub struct Timings {
     /// glTF encoding and preview.
     pub output_s: f64,
     pub total_s: f64,
+    /// Each stage on each node and facet, in the order they ran (`organtex
+    /// bake --profile` prints them).
+    pub stages: Vec<Span>,
 }
 
 /// What report.json holds.
@@ -147,15 +150,19 @@ pub fn bake(
     let baked = build_scene(&spec, opts.atlas.is_some(), progress)?;
     let build_s = start.elapsed().as_secs_f64();
 
+    let mut stages = baked.spans.clone();
     let t = Instant::now();
-    let interiors = interior::interiors(&baked, progress)?;
+    let interiors = interior::interiors(&baked, progress, &mut stages)?;
     let interior_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let blended = match opts.atlas {
-        Some(size) => Some(atlases(&baked, size, progress)?),
+        Some(size) => Some(timed(&mut stages, "atlases", "", || {
+            atlases(&baked, size, progress)
+        })?),
         None => None,
     };
+    let contrast_start = Instant::now();
     let figures: Vec<(Contrast, Contrast)> = match &blended {
         Some((b, u)) => baked
             .nodes
@@ -179,18 +186,29 @@ pub fn bake(
             })
             .collect(),
     };
+    stages.push(Span {
+        stage: "contrast".into(),
+        item: String::new(),
+        seconds: contrast_start.elapsed().as_secs_f64(),
+        parallel: false,
+    });
     let contrast_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     progress.stage("writing", 2);
-    let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
-    let glb = gltf::encode(&list, &spec.name, &spec.cameras)?;
+    let glb = timed(&mut stages, "glb", "", || {
+        let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
+        gltf::encode(&list, &spec.name, &spec.cameras).map(|glb| (list, glb))
+    });
+    let (list, glb) = glb?;
     progress.advance(1);
     // The preview goes through the viewer's renderer. A machine with no
     // GPU adapter, or one that cannot draw it (a limit, memory, a driver
     // error), gets the bake without it, and the report says why.
     let [w, h] = opts.preview;
-    let (picture, preview_renderer, preview_error) = draw_preview(&baked, &list, [w, h]);
+    let (picture, preview_renderer, preview_error) = timed(&mut stages, "preview", "", || {
+        draw_preview(&baked, &list, [w, h])
+    });
     progress.advance(1);
     check(progress)?;
     let output_s = t.elapsed().as_secs_f64();
@@ -237,6 +255,7 @@ pub fn bake(
             contrast_s,
             output_s,
             total_s: start.elapsed().as_secs_f64(),
+            stages,
         },
     };
 

@@ -35,6 +35,10 @@ pub struct Args {
     #[arg(long, value_name = "SIZE", allow_negative_numbers = true,
           value_parser = clap::value_parser!(u32).range(64..=16384))]
     atlas: Option<u32>,
+    /// Print where the time went: seconds per stage, per node and per
+    /// facet (report.json's timings.stages holds the same).
+    #[arg(long)]
+    profile: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -54,13 +58,19 @@ pub fn run(args: Args) -> Result<()> {
         }
         _ => unreachable!("clap requires a scene or --manifest with --index"),
     };
-    bake_and_print(&scene, &output, args.atlas.map(|s| s as usize))
+    bake_and_print(
+        &scene,
+        &output,
+        args.atlas.map(|s| s as usize),
+        args.profile,
+    )
 }
 
 pub fn bake_and_print(
     scene: &std::path::Path,
     out: &std::path::Path,
     atlas: Option<usize>,
+    profile: bool,
 ) -> Result<()> {
     let opts = BakeOptions {
         atlas,
@@ -69,8 +79,48 @@ pub fn bake_and_print(
     let bars = Bars::new();
     let result = bake(scene, out, &opts, &bars);
     bars.finish();
-    print(&result?);
+    let baked = result?;
+    print(&baked);
+    if profile {
+        print_profile(&baked.report.timings);
+    }
     Ok(())
+}
+
+/// The bake's stages as a table, the work done in parallel indented under
+/// the stage that ran it.
+fn print_profile(t: &organtex::bake::Timings) {
+    println!("where the time went ({:.1} s in all):", t.total_s);
+    println!(
+        "  {:<34} {:<28} {:>8} {:>6}",
+        "stage", "on", "seconds", "share"
+    );
+    for s in &t.stages {
+        let stage = if s.parallel {
+            format!("  {} (in parallel)", s.stage)
+        } else {
+            s.stage.clone()
+        };
+        let share = if s.parallel {
+            String::new()
+        } else {
+            format!("{:.0}%", 100.0 * s.seconds / t.total_s.max(1e-9))
+        };
+        println!("  {stage:<34} {:<28} {:>8.2} {share:>6}", s.item, s.seconds);
+    }
+    let listed: f64 = t
+        .stages
+        .iter()
+        .filter(|s| !s.parallel)
+        .map(|s| s.seconds)
+        .sum();
+    println!(
+        "  {:<34} {:<28} {:>8.2} {:>5.0}%",
+        "(reading, checks, the rest)",
+        "",
+        (t.total_s - listed).max(0.0),
+        100.0 * (t.total_s - listed).max(0.0) / t.total_s.max(1e-9)
+    );
 }
 
 fn figure(x: Option<f64>) -> String {

@@ -125,6 +125,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 &root.join("scenes").join("hysteroscopy_myomas.toml"),
                 Path::new("out"),
                 None,
+                false,
             )
         }
     }

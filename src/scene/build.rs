@@ -21,7 +21,7 @@ use crate::db::{self, Database, Output};
 use crate::error::{Error, Result};
 use crate::mesh::repair::make_manifold;
 use crate::mesh::{Facets, Topology, TriMesh, io};
-use crate::progress::{CancelOnly, Progress, check};
+use crate::progress::{CancelOnly, Progress, Span, check, timed};
 use crate::unwrap::flatten::Method;
 use crate::unwrap::intersect::overlapping_pairs;
 use crate::unwrap::metrics::UvMetrics;
@@ -124,6 +124,9 @@ pub struct BakedScene {
     pub nodes: Vec<BakedNode>,
     pub tissues: Tissues,
     pub spec: SceneSpec,
+    /// Where the build's time went: the database outputs, and per node its
+    /// mesh, visibility, unwraps (per facet, in parallel) and blending.
+    pub spans: Vec<Span>,
 }
 
 /// Build every node of `spec` (database outputs it needs are built first
@@ -137,16 +140,27 @@ pub fn build_scene(
     let database = Database::open(&spec.database)?;
     let ids: Vec<String> = database.tissues.iter().map(|t| t.id.clone()).collect();
     check_tissues(spec, &ids)?;
-    let tissues = ensure_tissues(spec, &database, progress)?;
+    let mut spans = Vec::new();
+    let tissues = timed(&mut spans, "tissues", "database", || {
+        ensure_tissues(spec, &database, progress)
+    })?;
     let mut nodes = Vec::new();
     for node in &spec.nodes {
         check(progress)?;
-        nodes.push(build_node(spec, node, &tissues, for_atlases, progress)?);
+        nodes.push(build_node(
+            spec,
+            node,
+            &tissues,
+            for_atlases,
+            progress,
+            &mut spans,
+        )?);
     }
     Ok(BakedScene {
         nodes,
         tissues,
         spec: spec.clone(),
+        spans,
     })
 }
 
@@ -281,8 +295,10 @@ fn build_node(
     tissues: &Tissues,
     for_atlases: bool,
     progress: &dyn Progress,
+    spans: &mut Vec<Span>,
 ) -> Result<BakedNode> {
-    let (mesh, topology) = node_mesh(node)?;
+    let name = node.name.as_str();
+    let (mesh, topology) = timed(spans, "mesh", name, || node_mesh(node))?;
     let settings = match_facets(node, &mesh)?;
     let viewpoints = if spec.cameras.is_empty() {
         Viewpoints::Orbit {
@@ -296,7 +312,10 @@ fn build_node(
                 .collect(),
         )
     };
-    let seen = visibility::compute(&mesh, &topology, &viewpoints, progress);
+    let seen = timed(spans, "visibility", name, || {
+        visibility::compute(&mesh, &topology, &viewpoints, progress)
+    });
+    let facets_start = Instant::now();
     let overlaps: Vec<f64> = settings.iter().map(|s| s.overlap).collect();
     let pieces = facet_pieces(&mesh, &topology, &overlaps);
     progress.stage("facets", pieces.len() as u64);
@@ -377,8 +396,24 @@ fn build_node(
             })
         })
         .collect::<Result<_>>()?;
+    spans.push(Span {
+        stage: "unwraps and bands".into(),
+        item: name.into(),
+        seconds: facets_start.elapsed().as_secs_f64(),
+        parallel: false,
+    });
+    for f in &facets {
+        spans.push(Span {
+            stage: "unwrap".into(),
+            item: format!("{}/{}", f.report.node, f.report.facet),
+            seconds: f.report.unwrap_s,
+            parallel: true,
+        });
+    }
     let normals = vertex_normals(&mesh);
-    let (compositor, unblended) = compositors(&mesh, &facets, tissues)?;
+    let (compositor, unblended) = timed(spans, "blending", name, || {
+        compositors(&mesh, &facets, tissues)
+    })?;
     Ok(BakedNode {
         name: node.name.clone(),
         mesh,

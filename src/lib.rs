@@ -11,6 +11,7 @@ pub mod bake;
 pub mod bench;
 pub mod blend;
 pub mod db;
+pub mod digest;
 pub mod error;
 #[doc(hidden)]
 pub mod fuzz;

@@ -1169,3 +1169,78 @@ fn a_bake_profiles_every_stage_and_the_cli_prints_it() {
         assert!(stdout.contains(row), "no '{row}' row in\n{stdout}");
     }
 }
+
+#[test]
+fn a_second_bake_keeps_the_interior_when_only_a_tissue_changed() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_tet_mesh = |wall: &str, block_size: f64| {
+        small_scene(0.0, 10.0, [0.0, 0.0])
+            .replace(
+                "texture = \"fundus-tissue\"",
+                &format!("texture = \"{wall}\""),
+            )
+            .replace(
+                "block_size = 5.0",
+                &format!("block_size = {block_size}\ntet_mesh = true"),
+            )
+            // A solid wall, so there is an inside to fill.
+            .replace("resolution = 5", "resolution = 5\nwall_thickness = 6.0")
+            .replace(
+                "[node.interior]",
+                "[[node.facet]]\nname = \"serosa\"\ntexture = \"gastric-serosa\"\n\n[node.interior]",
+            )
+    };
+    let stage_of = |baked: &Baked| -> Vec<String> {
+        baked
+            .report
+            .timings
+            .stages
+            .iter()
+            .map(|s| s.stage.clone())
+            .collect()
+    };
+    let files = ["scene.glb", "interior/uterus.nrrd", "interior/uterus.vtk"];
+    // Same file name in two folders, so the scene's name is the same too.
+    for d in ["a", "b"] {
+        std::fs::create_dir(dir.path().join(d)).unwrap();
+    }
+    let bake_into = |d: &str, body: &str| bake_in(&dir.path().join(d), "scene", body);
+    let first = bake_into("a", &with_tet_mesh("fundus-tissue", 5.0));
+    assert!(!stage_of(&first).contains(&"interior reused".to_string()));
+    assert!(stage_of(&first).contains(&"tet mesh".to_string()));
+
+    // Only a facet's tissue changes: the interior is kept, and every file
+    // is what a bake from scratch makes.
+    let changed = with_tet_mesh("colon-mucosa", 5.0);
+    let again = bake_into("a", &changed);
+    let stages = stage_of(&again);
+    assert!(
+        stages.contains(&"interior reused".to_string()),
+        "{stages:?}"
+    );
+    assert!(!stages.contains(&"tet mesh".to_string()), "{stages:?}");
+    let fresh = bake_into("b", &changed);
+    assert!(!stage_of(&fresh).contains(&"interior reused".to_string()));
+    for f in files {
+        assert!(
+            std::fs::read(dir.path().join("a/scene").join(f)).unwrap()
+                == std::fs::read(dir.path().join("b/scene").join(f)).unwrap(),
+            "{f} differs from a bake from scratch"
+        );
+    }
+    assert_eq!(
+        again.report.interiors[0].tet_mesh.as_ref().unwrap().tets,
+        fresh.report.interiors[0].tet_mesh.as_ref().unwrap().tets
+    );
+
+    // The interior's own settings change: it is made again.
+    let other = bake_into("a", &with_tet_mesh("colon-mucosa", 6.0));
+    assert!(!stage_of(&other).contains(&"interior reused".to_string()));
+    assert!(other.report.interiors[0].voxel_size > again.report.interiors[0].voxel_size);
+
+    // A folder whose key is gone (a bake cut short) makes it again.
+    std::fs::remove_file(dir.path().join("a/scene/interior/uterus.key")).unwrap();
+    let remade = bake_into("a", &with_tet_mesh("colon-mucosa", 6.0));
+    assert!(!stage_of(&remade).contains(&"interior reused".to_string()));
+    assert!(dir.path().join("a/scene/interior/uterus.key").is_file());
+}

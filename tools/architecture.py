@@ -39,7 +39,7 @@ FLOORS = [
     ["synth", "blend"],
     ["unwrap", "tetra"],
     ["mesh"],
-    ["linalg", "raster", "memory", "progress", "rng", "atomic", "fuzz", "error", "lib"],
+    ["linalg", "raster", "memory", "progress", "rng", "atomic", "digest", "fuzz", "error", "lib"],
 ]
 # The fuzz targets reach every parser; they sit beside the library's root,
 # which names every module.

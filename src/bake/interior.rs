@@ -2,6 +2,13 @@
 //! layered, from stereology, or a morph sampled), its tet mesh and its
 //! lapped solid texture, and the files they go to under DIR/interior/,
 //! as report.json's `interiors` lines name them (`scene::interior`).
+//!
+//! They are most of a bake's time and depend on little: the node's mesh,
+//! its `[node.interior]`, the tissue's built texture and the code. Beside
+//! each node's files goes a key, a digest of those (`interior_key`); a
+//! bake into the same folder whose key is the same keeps the files there
+//! (the same bytes it would make) instead of making them again, so a
+//! clinician who changes a facet's tissue waits for the surface alone.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -17,8 +24,10 @@ use crate::synth::volume::Volume;
 /// texture (seed 004, 3.3) or layered exemplar (seed 002, 4.2),
 /// `[bake] interior_voxels` a side.
 /// Each step's time goes onto `spans`.
+/// Interiors whose files in `out` carry the same key are kept.
 pub(super) fn interiors(
     scene: &BakedScene,
+    out_dir: &Path,
     progress: &dyn Progress,
     spans: &mut Vec<Span>,
 ) -> Result<Vec<Interior>> {
@@ -43,6 +52,28 @@ pub(super) fn interiors(
                 node.name, interior.texture
             ))
         })?;
+        // Names distinct as nodes may meet as file names ("a b", "a_b").
+        let file = interior_file(&node.name, k, &out);
+        let key = interior_key(scene, k, texture)?;
+        let start = Instant::now();
+        if let Some(line) = reusable(out_dir, &file, &key) {
+            spans.push(Span {
+                stage: "interior reused".into(),
+                item: name.into(),
+                seconds: start.elapsed().as_secs_f64(),
+                parallel: false,
+            });
+            out.push(Interior {
+                line,
+                key: Some(key),
+                volume: None,
+                tets: None,
+                lst: None,
+                sections: None,
+                surface: None,
+            });
+            continue;
+        }
         let mut volume = timed(spans, "interior block", name, || {
             interior_block(
                 texture,
@@ -59,8 +90,6 @@ pub(super) fn interiors(
             e => Error::invalid(format!("node '{}': interior: {e}", node.name)),
         })?;
         volume.spacing = interior.block_size / n as f64;
-        // Names distinct as nodes may meet as file names ("a b", "a_b").
-        let file = interior_file(&node.name, k, &out);
         let tets = if interior.tet_mesh || interior.lst.is_some() {
             Some(timed(spans, "tet mesh", name, || {
                 tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)
@@ -100,7 +129,8 @@ pub(super) fn interiors(
                 lst: lst.as_ref().map(|(line, _)| line.clone()),
                 morph: None,
             },
-            volume,
+            key: Some(key),
+            volume: Some(volume),
             tets: tets.map(|(_, m)| m),
             lst: lst.map(|(_, m)| m),
             sections: None,
@@ -182,7 +212,8 @@ fn morphed(
                 precompute_s,
             }),
         },
-        volume,
+        key: None,
+        volume: Some(volume),
         tets: None,
         lst: None,
         sections: Some(sections),
@@ -320,7 +351,11 @@ pub fn lap(
 /// lapped solid texture.
 pub(super) struct Interior {
     pub line: InteriorLine,
-    volume: Volume,
+    /// The digest of its inputs (`interior_key`); none for a morph, which
+    /// is made every time.
+    key: Option<String>,
+    /// None when the files already in the bake's folder are kept.
+    volume: Option<Volume>,
     tets: Option<crate::tetra::TetMesh>,
     lst: Option<crate::solid::lst::LstModel>,
     /// A morph's sections file, copied beside the block.
@@ -343,17 +378,29 @@ fn file_name(name: &str) -> String {
         .collect()
 }
 
-/// Write every interior's files under `out` (each atomically).
+/// Write every interior's files under `out` (each atomically), and its
+/// key last; the ones kept are already there.
 pub(super) fn write(interiors: &[Interior], out: &Path) -> Result<()> {
     for interior in interiors {
+        let Some(volume) = &interior.volume else {
+            continue;
+        };
         let path = out.join(&interior.line.file);
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
+        // No key while the files change: a bake cut short leaves none.
+        let key_file = path.with_extension("key");
+        match std::fs::remove_file(&key_file) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io(&key_file, e));
+            }
+            _ => {}
+        }
         // A layered block's y axis is depth: the header says so, for the
         // LST reader and other tools.
         let depth_axis = (interior.line.method == InteriorMethod::Layered).then_some(1);
-        interior.volume.write_nrrd_with_depth(&path, depth_axis)?;
+        volume.write_nrrd_with_depth(&path, depth_axis)?;
         if let (Some(line), Some(tets)) = (&interior.line.tet_mesh, &interior.tets) {
             crate::tetra::io::write_vtk(&out.join(&line.file), tets)?;
         }
@@ -367,6 +414,71 @@ pub(super) fn write(interiors: &[Interior], out: &Path) -> Result<()> {
                 crate::mesh::io::write_obj(&out.join(path), mesh, None)?;
             }
         }
+        if let Some(key) = &interior.key {
+            let stamp = KeyFile {
+                key: key.clone(),
+                line: interior.line.clone(),
+            };
+            let json = serde_json::to_string_pretty(&stamp).expect("the key serialises");
+            crate::atomic::write_file(&key_file, |w| writeln!(w, "{json}"))?;
+        }
     }
     Ok(())
+}
+
+/// What a node's interior key file holds: the digest of its inputs and
+/// the report line of the files made from them.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct KeyFile {
+    key: String,
+    line: InteriorLine,
+}
+
+/// The report line of the interior files in `out` for block `file`, when
+/// its key file says they were made from inputs with digest `key` and
+/// every file it names is there.
+fn reusable(out: &Path, file: &Path, key: &str) -> Option<InteriorLine> {
+    let text = std::fs::read_to_string(out.join(file).with_extension("key")).ok()?;
+    let stamp: KeyFile = serde_json::from_str(&text).ok()?;
+    (stamp.key == key
+        && stamp.line.file == file
+        && stamp.line.files().iter().all(|f| out.join(f).is_file()))
+    .then_some(stamp.line)
+}
+
+/// A digest of everything node `k`'s interior is made from: the code (the
+/// library's source digest, from build.rs), its `[node.interior]` and the
+/// bake's block size in voxels, the node's mesh and facets, and the bytes
+/// of its tissue's built texture and of its photographs.
+fn interior_key(scene: &BakedScene, k: usize, texture: &Path) -> Result<String> {
+    let mut digest = crate::digest::Digest::default();
+    digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
+    let spec = scene.spec.nodes[k].interior.as_ref().expect("an interior");
+    digest.feed(serde_json::to_string(spec).expect("serialises").as_bytes());
+    digest.feed(&(scene.spec.bake.interior_voxels as u64).to_le_bytes());
+    digest.feed(&(k as u64).to_le_bytes());
+    let mesh = &scene.nodes[k].mesh;
+    for p in &mesh.positions {
+        for c in p.to_array() {
+            digest.feed(&c.to_le_bytes());
+        }
+    }
+    for t in &mesh.triangles {
+        for v in t {
+            digest.feed(&v.to_le_bytes());
+        }
+    }
+    if let Some(f) = &mesh.facets {
+        for name in &f.names {
+            digest.feed(name.as_bytes());
+            digest.feed(&[0]);
+        }
+        for id in &f.of_face {
+            digest.feed(&id.to_le_bytes());
+        }
+    }
+    for file in std::iter::once(texture).chain(spec.photographs.iter().map(PathBuf::as_path)) {
+        digest.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
+    }
+    Ok(digest.hex())
 }

@@ -152,7 +152,7 @@ pub fn bake(
 
     let mut stages = baked.spans.clone();
     let t = Instant::now();
-    let interiors = interior::interiors(&baked, progress, &mut stages)?;
+    let interiors = interior::interiors(&baked, out, progress, &mut stages)?;
     let interior_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();

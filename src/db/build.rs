@@ -52,11 +52,10 @@ pub struct LightingReport {
 }
 
 /// A digest of everything an entry's outputs depend on: the recipe, the
-/// entry's settings and its source (and mask) bytes. FNV-1a: a change
-/// detector, not a security measure, so no crate is needed for it.
+/// entry's settings and its source (and mask) bytes.
 pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
-    let mut hash = FNV_START;
-    let mut feed = |bytes: &[u8]| hash = fnv1a(hash, bytes);
+    let mut digest = crate::digest::Digest::default();
+    let mut feed = |bytes: &[u8]| digest.feed(bytes);
     feed(&RECIPE.to_le_bytes());
     // The recipe's fields only: the name, kind, shelf, licence and credit
     // label the outputs without changing them. Plain fields with string
@@ -80,16 +79,7 @@ pub fn fingerprint(db: &Database, t: &Tissue) -> Result<String> {
         let path = db.root.join(file);
         feed(&std::fs::read(&path).map_err(|e| Error::io(&path, e))?);
     }
-    Ok(format!("{hash:016x}"))
-}
-
-const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
-
-/// FNV-1a of `bytes`, continuing from `hash`.
-fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
-    bytes.iter().fold(hash, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
+    Ok(digest.hex())
 }
 
 /// Whether `t`'s outputs are built and up to date.
@@ -308,21 +298,19 @@ pub fn stats_of(db: &Database, id: &str) -> Result<LabStats> {
 pub fn graded_colour(db: &Database, id: &str, grading: &Grading) -> Result<PathBuf> {
     let source = db.output_path(id, Output::Colour);
     let bytes = std::fs::read(&source).map_err(|e| Error::io(&source, e))?;
-    let mut digest = fnv1a(FNV_START, grading.key(id).as_bytes());
-    digest = fnv1a(digest, &bytes);
+    let mut digest = crate::digest::Digest::default();
+    digest.feed(grading.key(id).as_bytes());
+    digest.feed(&bytes);
     if let Some(m) = &grading.matched {
         let target = db.output_path(m, Output::Colour);
-        digest = fnv1a(
-            digest,
-            &std::fs::read(&target).map_err(|e| Error::io(&target, e))?,
-        );
+        digest.feed(&std::fs::read(&target).map_err(|e| Error::io(&target, e))?);
     }
     let path = db
         .root
         .join("build")
         .join(id)
         .join("graded")
-        .join(format!("{digest:016x}.png"));
+        .join(format!("{}.png", digest.hex()));
     if path.is_file() {
         return Ok(path);
     }

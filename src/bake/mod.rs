@@ -175,13 +175,15 @@ pub fn bake(
                 )
             })
             .collect(),
+        // Blended and unblended side by side: a scene of one node gets
+        // both cores too.
         None => baked
             .nodes
             .par_iter()
             .map(|node| {
-                (
-                    contrast(node, Colours::Layers(&node.compositor)),
-                    contrast(node, Colours::Layers(&node.unblended)),
+                rayon::join(
+                    || contrast(node, Colours::Layers(&node.compositor)),
+                    || contrast(node, Colours::Layers(&node.unblended)),
                 )
             })
             .collect(),

@@ -639,9 +639,6 @@ fn median(sorted: &[f64]) -> f64 {
     }
 }
 
-/// One frame of the texture-drag path: the bundled scene unwrapped and on
-/// the GPU (untimed); timed: move a texture (one uniform), draw, read the
-/// pixels back (so the GPU's work is inside the time).
 /// The default scene baked once, untimed; each step then changes the
 /// polyp's tissue (two by turns) and bakes into the same folder.
 fn rebake_step(root: &Path) -> Result<Step> {
@@ -670,6 +667,9 @@ fn rebake_step(root: &Path) -> Result<Step> {
     }))
 }
 
+/// One frame of the texture-drag path: the bundled scene unwrapped and on
+/// the GPU (untimed); timed: move a texture (one uniform), draw, read the
+/// pixels back (so the GPU's work is inside the time).
 #[cfg(feature = "render")]
 fn frame_step(root: &Path) -> Result<Step> {
     use crate::render::{Filtering, Gpu, GpuScene, Layers, Offscreen, Renderer, View};

@@ -22,9 +22,9 @@ use crate::synth::volume::Volume;
 
 /// Every node's interior block, synthesised from its tissue's colour
 /// texture (seed 004, 3.3) or layered exemplar (seed 002, 4.2),
-/// `[bake] interior_voxels` a side.
-/// Each step's time goes onto `spans`.
-/// Interiors whose files in `out` carry the same key are kept.
+/// `[bake] interior_voxels` a side, with its tet mesh and lapped solid
+/// texture where asked; one whose files in `out_dir` carry its key is kept
+/// as it is there. Each step's time goes onto `spans`.
 pub(super) fn interiors(
     scene: &BakedScene,
     out_dir: &Path,

@@ -162,38 +162,32 @@ pub fn bake(
         })?),
         None => None,
     };
-    let contrast_start = Instant::now();
-    let figures: Vec<(Contrast, Contrast)> = match &blended {
-        Some((b, u)) => baked
-            .nodes
-            .iter()
-            .zip(b.iter().zip(u))
-            .map(|(node, (b, u))| {
-                (
-                    contrast(node, Colours::Atlases(b)),
-                    contrast(node, Colours::Atlases(u)),
-                )
-            })
-            .collect(),
-        // Blended and unblended side by side: a scene of one node gets
-        // both cores too.
-        None => baked
-            .nodes
-            .par_iter()
-            .map(|node| {
-                rayon::join(
-                    || contrast(node, Colours::Layers(&node.compositor)),
-                    || contrast(node, Colours::Layers(&node.unblended)),
-                )
-            })
-            .collect(),
-    };
-    stages.push(Span {
-        stage: "contrast".into(),
-        item: String::new(),
-        seconds: contrast_start.elapsed().as_secs_f64(),
-        parallel: false,
-    });
+    let figures: Vec<(Contrast, Contrast)> =
+        timed(&mut stages, "contrast", "", || match &blended {
+            Some((b, u)) => baked
+                .nodes
+                .iter()
+                .zip(b.iter().zip(u))
+                .map(|(node, (b, u))| {
+                    (
+                        contrast(node, Colours::Atlases(b)),
+                        contrast(node, Colours::Atlases(u)),
+                    )
+                })
+                .collect(),
+            // Blended and unblended side by side: a scene of one node gets
+            // both cores too.
+            None => baked
+                .nodes
+                .par_iter()
+                .map(|node| {
+                    rayon::join(
+                        || contrast(node, Colours::Layers(&node.compositor)),
+                        || contrast(node, Colours::Layers(&node.unblended)),
+                    )
+                })
+                .collect(),
+        });
     let contrast_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();

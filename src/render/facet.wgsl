@@ -113,8 +113,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let b = cross(n, t) * in.tangent.w;
         let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
         let bump = material.normal.x;
-        n_film = normalize(t * (m.x * bump * FILM_RELIEF) + b * (m.y * bump * FILM_RELIEF) + n * m.z);
-        n = normalize(t * (m.x * bump) + b * (m.y * bump) + n * m.z);
+        let tbn = mat3x3<f32>(t, b, n);
+        n_film = normalize(tbn * vec3<f32>(m.xy * bump * FILM_RELIEF, m.z));
+        n = normalize(tbn * vec3<f32>(m.xy * bump, m.z));
         // Where the relief varies within a texel of the mip level sampled,
         // the averaged normal is shorter: its variance widens the film's
         // lobe (Toksvig 2005), so distant relief glistens as a sheen, not

@@ -248,7 +248,6 @@ fn info(texture: json::Index<json::Texture>, transform: Option<&Transform>) -> j
 /// The glTF material of `m`.
 fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>> {
     let colour = b.texture(&m.colour)?;
-    let mut film_normal = None;
     let normal = match &m.normal {
         Some(n) => {
             let index = b.texture(&n.texture)?;
@@ -259,15 +258,6 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
                     serde_json::to_value(khr(t)).expect("serialises"),
                 );
             }
-            // The film sees the same relief, sharper (draw::FILM_RELIEF).
-            let mut film = serde_json::json!({
-                "index": index.value(),
-                "scale": n.scale as f64 * super::draw::FILM_RELIEF,
-            });
-            if !others.others.is_empty() {
-                film["extensions"] = serde_json::to_value(&others.others).expect("serialises");
-            }
-            film_normal = Some(film);
             Some(json::material::NormalTexture {
                 index,
                 scale: n.scale,
@@ -278,6 +268,13 @@ fn material(b: &mut Builder, m: &Material) -> Result<json::Index<json::Material>
         }
         None => None,
     };
+    // The film sees the same relief through the same texture info, sharper
+    // (draw::FILM_RELIEF).
+    let film_normal = normal.as_ref().map(|n| {
+        let mut info = serde_json::to_value(n).expect("serialises");
+        info["scale"] = (n.scale as f64 * super::draw::FILM_RELIEF).into();
+        info
+    });
     Ok(b.root.push(json::Material {
         alpha_cutoff: None,
         alpha_mode: Valid(if m.blend {

@@ -44,7 +44,7 @@ pub use model::{Layer, LstModel};
 pub use sample::LstInterior;
 
 use crate::error::{Error, Result};
-use crate::progress::Progress;
+use crate::progress::{self, Progress};
 use crate::rng;
 use crate::tetra::TetMesh;
 
@@ -226,42 +226,50 @@ pub fn fill_regions(
         .map(|f| mesh.positions.par_iter().map(|&p| f.value(p)).collect());
 
     let splotch = Splotch::new(main.seed);
-    let mut parts = Vec::with_capacity(regions.len() + 1);
     let main_tets: Vec<u32> = (0..nt as u32)
         .filter(|&t| part_of[t as usize] == 0)
         .collect();
-    for (tets, opts) in
-        std::iter::once((&main_tets, main)).chain(regions.iter().map(|r| (&r.tets, &r.options)))
-    {
-        if tets.is_empty() {
-            parts.push(None);
-            continue;
-        }
-        let filled = if tets.len() == nt {
-            fill_part(
-                mesh,
-                opts,
-                depth_field.as_ref(),
-                depth.as_deref(),
-                &splotch,
-                progress,
-            )?
-        } else {
-            let (sub, old) = mesh.subset(tets);
-            let d: Option<Vec<f64>> = depth
-                .as_ref()
-                .map(|d| old.iter().map(|&v| d[v as usize]).collect());
-            fill_part(
-                &sub,
-                opts,
-                depth_field.as_ref(),
-                d.as_deref(),
-                &splotch,
-                progress,
-            )?
-        };
-        parts.push(Some(filled));
-    }
+    // The parts are independent (no patch crosses a region's border): they
+    // are filled side by side, only the first (the largest, the organ's
+    // own) showing its progress.
+    let jobs: Vec<(&Vec<u32>, &LstOptions)> = std::iter::once((&main_tets, main))
+        .chain(regions.iter().map(|r| (&r.tets, &r.options)))
+        .collect();
+    let quiet = progress::CancelOnly(progress);
+    let parts: Vec<Option<(paste::Pasted, FillStats)>> = jobs
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(tets, opts))| {
+            let progress: &dyn Progress = if k == 0 { progress } else { &quiet };
+            if tets.is_empty() {
+                return Ok(None);
+            }
+            let filled = if tets.len() == nt {
+                fill_part(
+                    mesh,
+                    opts,
+                    depth_field.as_ref(),
+                    depth.as_deref(),
+                    &splotch,
+                    progress,
+                )?
+            } else {
+                let (sub, old) = mesh.subset(tets);
+                let d: Option<Vec<f64>> = depth
+                    .as_ref()
+                    .map(|d| old.iter().map(|&v| d[v as usize]).collect());
+                fill_part(
+                    &sub,
+                    opts,
+                    depth_field.as_ref(),
+                    d.as_deref(),
+                    &splotch,
+                    progress,
+                )?
+            };
+            Ok(Some(filled))
+        })
+        .collect::<Result<_>>()?;
 
     // One model: each tet's layers from its part, patches numbered on
     // across the parts.
@@ -445,7 +453,8 @@ fn fill_part(
     // carries the seed's randomly drawn axes over (made perpendicular to
     // the tet's primary axis), so a patch turns with its field and no more.
     let frame_of = |t: usize, patch: u32, seed_frame: Option<&DMat3>| -> DMat3 {
-        let drawn = turn(patch) * DVec3::X;
+        // Drawn only for the seed (the others carry the seed's over).
+        let drawn = || turn(patch) * DVec3::X;
         // (r, s, t) columns, s along the depth gradient.
         let depth_frame = |secondary: DVec3, length: f64| {
             let f = fields::frame(gradient[t], secondary);
@@ -454,10 +463,10 @@ fn fill_part(
         match kind {
             TextureType::Isotropic => DMat3::from_quat(turn(patch)) * scale,
             TextureType::Oriented => {
-                fields::frame(strokes[t], seed_frame.map_or(drawn, |f| f.col(1))) * scale
+                fields::frame(strokes[t], seed_frame.map_or_else(drawn, |f| f.col(1))) * scale
             }
             TextureType::Layered => depth_frame(
-                seed_frame.map_or(drawn, |f| f.col(0)),
+                seed_frame.map_or_else(drawn, |f| f.col(0)),
                 1.0 / gradient[t].length(),
             ),
             TextureType::Tensor => depth_frame(strokes[t], scale),

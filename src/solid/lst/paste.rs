@@ -12,6 +12,10 @@
 //! clump (sec. 5.2.6), a tet leaving the uncovered list once all of them
 //! reach 1.
 //!
+//! Patches are sited and grown `BATCH` at a time, side by side (the
+//! paper pastes one by one; growing and solving a clump is most of the
+//! time, and sequential pasting left all but one core idle).
+//!
 //! Choices the paper leaves open: "close to the seed's tensor" is
 //! `|A F_t - I| <= TENSOR_CLOSE` (Frobenius; `A` the seed's map, `F_t` the
 //! tet's frame), which admits about 15 degrees of turn or a scale ratio
@@ -29,7 +33,7 @@
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::mask::{MaskKind, Splotch};
+use super::mask::{Cover, MaskKind, Splotch, TabulatedSplotch, cover};
 use super::model::Layer;
 use crate::error::{Error, Result};
 use crate::linalg::SpdPattern;
@@ -96,32 +100,217 @@ pub fn paste(
     let adjacency = mesh.face_adjacency()?;
     let nt = mesh.num_tets();
     let samples = sample_points();
+    let splotch = &splotch.tabulated();
     let ns = samples.len();
     let mut coverage = vec![0u8; nt * ns];
     // The uncovered tets, and each one's place in that list.
     let mut uncovered: Vec<u32> = (0..nt as u32).collect();
     let mut place: Vec<u32> = (0..nt as u32).collect();
     let mut pasted: Vec<(u32, Layer)> = Vec::new();
-    let mut local = vec![u32::MAX; mesh.num_vertices()];
-    let mut in_clump = vec![false; nt];
     let mut angles: Vec<f32> = Vec::new();
     progress.stage("pasting patches", nt as u64);
     let max_patches = (ns * nt + 1) as u32;
     let mut patch = 0u32;
+    let mut draw = 0u32;
+    let pasting = Pasting {
+        mesh,
+        adjacency: &adjacency,
+        fields,
+        splotch,
+    };
     while !uncovered.is_empty() {
         progress::check(progress)?;
         if patch >= max_patches {
             return Err(Error::invalid("the pasting does not converge"));
         }
-        let seed_tet = uncovered[rng::below(seed, &[patch as u64], uncovered.len())] as usize;
-        // The centre at the least covered sample point.
-        let cov = &coverage[seed_tet * ns..(seed_tet + 1) * ns];
-        let (best, _) = cov
-            .iter()
-            .enumerate()
-            .min_by_key(|&(i, &c)| (c, i))
-            .expect("165 samples");
-        let bary = samples[best].map(|x| x as f64);
+        // A batch of sites, each a seed tet drawn from the uncovered ones
+        // and its least covered sample point.
+        let sites: Vec<Site> = (draw..draw + BATCH)
+            .map(|d| {
+                let seed_tet = uncovered[rng::below(seed, &[d as u64], uncovered.len())] as usize;
+                let cov = &coverage[seed_tet * ns..(seed_tet + 1) * ns];
+                let (sample, &then) = cov
+                    .iter()
+                    .enumerate()
+                    .min_by_key(|&(i, &c)| (c, i))
+                    .expect("165 samples");
+                Site {
+                    draw: d,
+                    seed_tet,
+                    bary: samples[sample].map(|x| x as f64),
+                    sample,
+                    then,
+                }
+            })
+            .collect();
+        draw += BATCH;
+        let grown: Vec<Result<Grown>> = sites.par_iter().map(|s| pasting.grow(s)).collect();
+        for (site, grown) in sites.iter().zip(grown) {
+            // An earlier patch of the batch reached this one's centre: the
+            // pasting one by one would have sited it elsewhere.
+            if coverage[site.seed_tet * ns + site.sample] != site.then {
+                continue;
+            }
+            let Grown {
+                clump,
+                corners,
+                kind,
+                seed_frame,
+            } = grown?;
+            // Record the layers and add coverage (sec. 5.2.6).
+            let frame = |t: usize| (fields.frame_of)(t, site.draw, Some(&seed_frame));
+            for (&t, w) in clump.iter().zip(&corners) {
+                let c = mesh.corners(t);
+                let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
+                let j = DMat3::from_cols(w[1] - w[0], w[2] - w[0], w[3] - w[0]) * g.inverse();
+                let f = frame(t);
+                for axis in 0..3 {
+                    let v = j * f.col(axis);
+                    let cos = (v[axis] / v.length()).clamp(-1.0, 1.0);
+                    angles.push(cos.acos().to_degrees() as f32);
+                }
+                pasted.push((
+                    t as u32,
+                    Layer {
+                        patch,
+                        mask: kind,
+                        coords: w.map(|c| c.as_vec3().to_array()),
+                    },
+                ));
+            }
+            // The masks' alpha at every sample of the clump's tets not yet
+            // covered (more alpha changes nothing on the others), in
+            // parallel (the tets are independent); the uncovered list is
+            // updated after, in clump order, so the result does not depend
+            // on threads. A tet the mask leaves out, or covers whole, takes
+            // 0 or 1 without its samples (`mask::cover`, exact: alpha is 0
+            // or 1 there too).
+            let alphas: Vec<Option<Vec<u8>>> = clump
+                .par_iter()
+                .zip(&corners)
+                .map(|(&t, w)| {
+                    let cov = &coverage[t * ns..(t + 1) * ns];
+                    if cov.iter().all(|&c| c == 255) {
+                        return None;
+                    }
+                    Some(match cover(kind, &w.map(|c| c.to_array()), 0.0) {
+                        Cover::None => return None,
+                        Cover::Full => vec![255; ns],
+                        // Samples already covered take nothing more.
+                        Cover::Part => samples
+                            .iter()
+                            .zip(cov)
+                            .map(|(b, &c)| {
+                                if c == 255 {
+                                    return 0;
+                                }
+                                let p = w[0] * b[0] as f64
+                                    + w[1] * b[1] as f64
+                                    + w[2] * b[2] as f64
+                                    + w[3] * b[3] as f64;
+                                (splotch.alpha(kind, p.to_array()) * 255.0).round() as u8
+                            })
+                            .collect(),
+                    })
+                })
+                .collect();
+            for (&t, alpha) in clump.iter().zip(alphas) {
+                let Some(alpha) = alpha else { continue };
+                let cov = &mut coverage[t * ns..(t + 1) * ns];
+                for (c, a) in cov.iter_mut().zip(alpha) {
+                    *c = c.saturating_add(a);
+                }
+                if cov.iter().all(|&c| c == 255) {
+                    let at = place[t] as usize;
+                    let last = *uncovered.last().expect("t was uncovered");
+                    uncovered.swap_remove(at);
+                    if (last as usize) != t {
+                        place[last as usize] = at as u32;
+                    }
+                    progress.advance(1);
+                }
+            }
+            patch += 1;
+        }
+    }
+    // Per tet, in paste order: a stable counting sort by tet.
+    let mut start = vec![0u32; nt + 1];
+    for (t, _) in &pasted {
+        start[*t as usize + 1] += 1;
+    }
+    for t in 0..nt {
+        start[t + 1] += start[t];
+    }
+    let mut fill = start.clone();
+    let mut layers = vec![
+        Layer {
+            patch: 0,
+            mask: MaskKind::Splotch,
+            coords: [[0.0; 3]; 4],
+        };
+        pasted.len()
+    ];
+    for (t, l) in pasted {
+        layers[fill[t as usize] as usize] = l;
+        fill[t as usize] += 1;
+    }
+    Ok(Pasted {
+        start,
+        layers,
+        patches: patch,
+        angles,
+    })
+}
+
+/// Patches sited at once from the same coverage and grown side by side.
+/// A constant, not the thread count, so the result is the same on any
+/// machine; small, so few are wasted: a patch whose centre an earlier one
+/// of its batch reached is dropped (pasting one by one would not have put
+/// it there), and the rest differ from one-by-one pasting only in which
+/// uncovered tets they were drawn from.
+const BATCH: u32 = 4;
+
+/// Where a patch goes: its seed tet, drawn (the `draw`th) from those
+/// uncovered before its batch, and the seed's least covered sample point
+/// (`sample`, barycentric `bary`), covered `then` at that time.
+struct Site {
+    draw: u32,
+    seed_tet: usize,
+    bary: [f64; 4],
+    sample: usize,
+    then: u8,
+}
+
+/// A patch grown and solved: its clump, the texture coordinates of each
+/// clump tet's corners, its mask, and the seed's frame.
+struct Grown {
+    clump: Vec<usize>,
+    corners: Vec<[DVec3; 4]>,
+    kind: MaskKind,
+    seed_frame: DMat3,
+}
+
+/// What growing a patch reads.
+struct Pasting<'a> {
+    mesh: &'a TetMesh,
+    adjacency: &'a [[u32; 4]],
+    fields: &'a Fields<'a>,
+    splotch: &'a TabulatedSplotch<'a>,
+}
+
+impl Pasting<'_> {
+    /// Seed, clump and texture coordinates of the patch at `site` (sec.
+    /// 5.2.3-5.2.5).
+    fn grow(&self, site: &Site) -> Result<Grown> {
+        let Pasting {
+            mesh,
+            adjacency,
+            fields,
+            splotch,
+        } = *self;
+        let (seed_tet, bary) = (site.seed_tet, site.bary);
+        let mut local = vec![u32::MAX; mesh.num_vertices()];
+        let mut in_clump = vec![false; mesh.num_tets()];
         let corners = mesh.corners(seed_tet);
         let centre_obj = (0..4).fold(DVec3::ZERO, |a, k| a + corners[k] * bary[k]);
         let seed_depth = fields.depth.map(|d| {
@@ -131,11 +320,10 @@ pub fn paste(
         });
         let kind = seed_depth.map_or(MaskKind::Splotch, MaskKind::for_depth);
         let centre_tex = DVec3::new(0.5, seed_depth.unwrap_or(0.5), 0.5);
-        let seed_frame = (fields.frame_of)(seed_tet, patch, None);
-        let frame = |t: usize| (fields.frame_of)(t, patch, Some(&seed_frame));
+        let seed_frame = (fields.frame_of)(seed_tet, site.draw, None);
+        let frame = |t: usize| (fields.frame_of)(t, site.draw, Some(&seed_frame));
         let map = seed_frame.inverse();
         let seed_map = |p: DVec3| map * (p - centre_obj) + centre_tex;
-
         // Grow the clump (sec. 5.2.4).
         let mut clump = vec![seed_tet];
         in_clump[seed_tet] = true;
@@ -171,11 +359,18 @@ pub fn paste(
         // out (a layer missing there would show as a step in the colours).
         let mut coords;
         let mut solves = 0;
+        let mut rows: Vec<TetRows> = Vec::with_capacity(clump.len());
         loop {
+            // Each tet's rows once per patch: the clump only grows.
+            rows.extend(
+                clump[rows.len()..]
+                    .iter()
+                    .map(|&t| TetRows::new(mesh, t, &frame(t))),
+            );
             coords = optimise(
                 mesh,
                 fields.depth,
-                &frame,
+                &rows,
                 &clump,
                 &mut local,
                 seed_tet,
@@ -238,104 +433,29 @@ pub fn paste(
                 break;
             }
         }
-
-        // Record the layers and add coverage (sec. 5.2.6).
-        for &t in &clump {
-            let w = mesh.tets[t].map(|v| coords[local[v as usize] as usize]);
-            let c = mesh.corners(t);
-            let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
-            let j = DMat3::from_cols(w[1] - w[0], w[2] - w[0], w[3] - w[0]) * g.inverse();
-            let f = frame(t);
-            for axis in 0..3 {
-                let v = j * f.col(axis);
-                let cos = (v[axis] / v.length()).clamp(-1.0, 1.0);
-                angles.push(cos.acos().to_degrees() as f32);
-            }
-            pasted.push((
-                t as u32,
-                Layer {
-                    patch,
-                    mask: kind,
-                    coords: w.map(|c| c.as_vec3().to_array()),
-                },
-            ));
-        }
-        // The masks' alpha at every sample of every clump tet, in parallel
-        // (the tets are independent); the uncovered list is updated after,
-        // in clump order, so the result does not depend on threads.
-        let alphas: Vec<Vec<u8>> = clump
-            .par_iter()
-            .map(|&t| {
-                let w = mesh.tets[t].map(|v| coords[local[v as usize] as usize]);
-                samples
-                    .iter()
-                    .map(|b| {
-                        let p = w[0] * b[0] as f64
-                            + w[1] * b[1] as f64
-                            + w[2] * b[2] as f64
-                            + w[3] * b[3] as f64;
-                        (splotch.alpha(kind, p.to_array()) * 255.0).round() as u8
-                    })
-                    .collect()
-            })
-            .collect();
-        for (&t, alpha) in clump.iter().zip(alphas) {
-            let cov = &mut coverage[t * ns..(t + 1) * ns];
-            let was_covered = cov.iter().all(|&c| c == 255);
-            for (c, a) in cov.iter_mut().zip(alpha) {
-                *c = c.saturating_add(a);
-            }
-            if !was_covered && cov.iter().all(|&c| c == 255) {
-                let at = place[t] as usize;
-                let last = *uncovered.last().expect("t was uncovered");
-                uncovered.swap_remove(at);
-                if (last as usize) != t {
-                    place[last as usize] = at as u32;
-                }
-                progress.advance(1);
-            }
-        }
-        for &t in &clump {
-            in_clump[t] = false;
-            for v in mesh.tets[t] {
-                local[v as usize] = u32::MAX;
-            }
-        }
-        patch += 1;
+        Ok(Grown {
+            corners: clump
+                .iter()
+                .map(|&t| mesh.tets[t].map(|v| coords[local[v as usize] as usize]))
+                .collect(),
+            clump,
+            kind,
+            seed_frame,
+        })
     }
-    // Per tet, in paste order: a stable counting sort by tet.
-    let mut start = vec![0u32; nt + 1];
-    for (t, _) in &pasted {
-        start[*t as usize + 1] += 1;
-    }
-    for t in 0..nt {
-        start[t + 1] += start[t];
-    }
-    let mut fill = start.clone();
-    let mut layers = vec![
-        Layer {
-            patch: 0,
-            mask: MaskKind::Splotch,
-            coords: [[0.0; 3]; 4],
-        };
-        pasted.len()
-    ];
-    for (t, l) in pasted {
-        layers[fill[t as usize] as usize] = l;
-        fill[t as usize] += 1;
-    }
-    Ok(Pasted {
-        start,
-        layers,
-        patches: patch,
-        angles,
-    })
 }
 
 /// Whether the tet with texture-space corners `w` meets the mask: alpha
 /// above 0 at a corner, an edge midpoint, a face centroid or the centroid,
 /// or the texture's centre inside it (a tet larger than the mask).
-fn meets_mask(splotch: &Splotch, kind: MaskKind, w: &[DVec3; 4]) -> bool {
+fn meets_mask(splotch: &TabulatedSplotch, kind: MaskKind, w: &[DVec3; 4]) -> bool {
+    // Whole tets out of the mask's reach, or inside its core, need no
+    // probes (the same answer: every probe lies in the tet).
+    match cover(kind, &w.map(|c| c.to_array()), 0.0) {
+        Cover::None => return false,
+        Cover::Full => return true,
+        Cover::Part => {}
+    }
     let probe = |p: DVec3| splotch.alpha(kind, p.to_array()) > 0.0;
     let sum = w[0] + w[1] + w[2] + w[3];
     for i in 0..4 {
@@ -355,6 +475,38 @@ fn meets_mask(splotch: &Splotch, kind: MaskKind, w: &[DVec3; 4]) -> bool {
     b.iter().all(|&x| x >= 0.0)
 }
 
+/// A tet's three rows of the least-squares system (sec. 5.2.5): per
+/// texture axis, the coefficients on its four vertices of the texture map
+/// applied to its frame's axis (target: the unit axis); and their normal
+/// block, the sum of the rows' outer products.
+struct TetRows {
+    coefficients: [[f64; 4]; 3],
+    block: [[f64; 4]; 4],
+}
+
+impl TetRows {
+    fn new(mesh: &TetMesh, t: usize, frame: &DMat3) -> TetRows {
+        let c = mesh.corners(t);
+        let gi = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]).inverse();
+        let coefficients = [0, 1, 2].map(|axis| {
+            let beta = gi * frame.col(axis);
+            [-(beta.x + beta.y + beta.z), beta.x, beta.y, beta.z]
+        });
+        let mut block = [[0.0; 4]; 4];
+        for a in &coefficients {
+            for i in 0..4 {
+                for j in 0..4 {
+                    block[i][j] += a[i] * a[j];
+                }
+            }
+        }
+        TetRows {
+            coefficients,
+            block,
+        }
+    }
+}
+
 /// Texture coordinates of the clump's vertices (sec. 5.2.5): for every
 /// tet, its frame's axes mapped by the (per-tet linear) texture map should
 /// be the texture's unit axes; the seed point maps to `centre`. For
@@ -364,7 +516,7 @@ fn meets_mask(splotch: &Splotch, kind: MaskKind, w: &[DVec3; 4]) -> bool {
 fn optimise(
     mesh: &TetMesh,
     depth: Option<&[f64]>,
-    frame_of: &dyn Fn(usize) -> DMat3,
+    rows: &[TetRows],
     clump: &[usize],
     local: &mut [u32],
     seed_tet: usize,
@@ -386,51 +538,82 @@ fn optimise(
         }
     }
     let m = verts.len();
-    // Rows: four coefficients on the tet's local vertices; targets per
-    // component. The normal matrix is shared by the components.
-    let mut positions: Vec<(u32, u32)> = Vec::with_capacity(clump.len() * 10 + 10);
-    let mut values: Vec<f64> = Vec::with_capacity(clump.len() * 30 + 10);
+    // The normal matrix, sum over tets of a 4 x 4 block: each tet's three
+    // rows (one per axis, four coefficients on its vertices, target the
+    // unit axis) and the seed's row, summed per tet before assembly; the
+    // three components share it. Assembled once per vertex pair, column
+    // by column over the tets at each vertex (a counting sort, no
+    // comparison sort of every row's entries: this solve runs a few times
+    // per patch, thousands of times per organ).
     let mut rhs = [vec![0.0; m], vec![0.0; m], vec![0.0; m]];
-    let mut add_row = |ids: [u32; 4],
-                       a: [f64; 4],
-                       target: [f64; 3],
-                       positions: &mut Vec<(u32, u32)>,
-                       values: &mut Vec<f64>| {
-        for i in 0..4 {
-            for j in 0..4 {
-                if ids[i] >= ids[j] {
-                    positions.push((ids[i], ids[j]));
-                    values.push(a[i] * a[j]);
-                }
-            }
-            for c in 0..3 {
-                rhs[c][ids[i] as usize] += a[i] * target[c];
+    let mut blocks: Vec<([u32; 4], [[f64; 4]; 4])> = Vec::with_capacity(clump.len() + 1);
+    for (&t, r) in clump.iter().zip(rows) {
+        let ids = mesh.tets[t].map(|v| local[v as usize]);
+        for (axis, a) in r.coefficients.iter().enumerate() {
+            for i in 0..4 {
+                rhs[axis][ids[i] as usize] += a[i];
             }
         }
-    };
-    for &t in clump {
-        let tet = mesh.tets[t];
-        let ids = tet.map(|v| local[v as usize]);
-        let c = mesh.corners(t);
-        let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
-        let gi = g.inverse();
-        let frame = frame_of(t);
-        for axis in 0..3 {
-            let beta = gi * frame.col(axis);
-            let a = [-(beta.x + beta.y + beta.z), beta.x, beta.y, beta.z];
-            let mut target = [0.0; 3];
-            target[axis] = 1.0;
-            add_row(ids, a, target, &mut positions, &mut values);
-        }
+        blocks.push((ids, r.block));
     }
     let seed_ids = mesh.tets[seed_tet].map(|v| local[v as usize]);
-    add_row(
-        seed_ids,
-        seed_bary,
-        centre.to_array(),
-        &mut positions,
-        &mut values,
-    );
+    let mut seed_block = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..4 {
+            seed_block[i][j] = seed_bary[i] * seed_bary[j];
+        }
+        for c in 0..3 {
+            rhs[c][seed_ids[i] as usize] += seed_bary[i] * centre[c];
+        }
+    }
+    blocks.push((seed_ids, seed_block));
+    // The blocks at each vertex (CSR by vertex).
+    let mut at_start = vec![0u32; m + 1];
+    for (ids, _) in &blocks {
+        for &v in ids {
+            at_start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..m {
+        at_start[v + 1] += at_start[v];
+    }
+    let mut at = vec![0u32; at_start[m] as usize];
+    let mut fill = at_start.clone();
+    for (b, (ids, _)) in blocks.iter().enumerate() {
+        for &v in ids {
+            at[fill[v as usize] as usize] = b as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    // Column j: rows i >= j of the blocks at j, each pair once.
+    let mut positions: Vec<(u32, u32)> = Vec::new();
+    let mut values: Vec<f64> = Vec::new();
+    let mut slot = vec![u32::MAX; m];
+    for j in 0..m {
+        let first = positions.len();
+        for &b in &at[at_start[j] as usize..at_start[j + 1] as usize] {
+            let (ids, block) = &blocks[b as usize];
+            let kj = ids
+                .iter()
+                .position(|&v| v as usize == j)
+                .expect("at lists its own");
+            for (ki, &i) in ids.iter().enumerate() {
+                if (i as usize) < j {
+                    continue;
+                }
+                let e = slot[i as usize];
+                let e = if e != u32::MAX && e as usize >= first {
+                    e as usize
+                } else {
+                    slot[i as usize] = positions.len() as u32;
+                    positions.push((i, j as u32));
+                    values.push(0.0);
+                    positions.len() - 1
+                };
+                values[e] += block[ki][kj];
+            }
+        }
+    }
     let pattern = SpdPattern::new(m, &positions)?;
     let chol = pattern.factor(&values)?;
     let solve = |c: usize, rhs: &mut [Vec<f64>; 3]| chol.solve(&mut rhs[c]);

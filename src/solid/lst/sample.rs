@@ -18,7 +18,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::locate::Locator;
-use super::mask::{FALLOFF, MaskKind, RADIUS, Splotch, WANDER};
+use super::mask::{Cover, MaskKind, Splotch, cover};
 use super::model::{Layer, LstModel};
 use crate::error::{Error, Result};
 use crate::solid::Interior;
@@ -131,7 +131,7 @@ impl LstInterior {
         let reach = reach(at);
         for layer in layers {
             let w = corners.map(|b| self.coords(t, layer, b));
-            match mask_bounds(layer.mask, &w, reach) {
+            match cover(layer.mask, &w, reach) {
                 Cover::None => continue,
                 // A full cover hides every layer before it.
                 Cover::Full => kept.clear(),
@@ -209,15 +209,6 @@ fn composite(
     }
 }
 
-/// How a layer's mask covers a face.
-enum Cover {
-    /// Alpha 0 everywhere.
-    None,
-    /// Alpha 1 everywhere.
-    Full,
-    Part,
-}
-
 /// How far past the face's corners its points reach: the face scaled
 /// about its centroid by `1 + reach` holds every point of `at`.
 fn reach(at: &[[f64; 3]]) -> f64 {
@@ -228,61 +219,6 @@ fn reach(at: &[[f64; 3]]) -> f64 {
         .fold(0.0f64, |lo, x| lo.min(x))
         .abs()
         * 3.0
-}
-
-/// Whether the mask is 0 or 1 all over the face with corner texture
-/// coordinates `w`, grown by `reach` about its centroid. Conservative:
-/// `Part` whenever unsure. A point's distance from the mask's centre is
-/// convex along the face, so its largest value is at a corner and its
-/// smallest at least the centre's distance from the face's box.
-fn mask_bounds(kind: MaskKind, w: &[[f64; 3]; 3], reach: f64) -> Cover {
-    let centroid = [0, 1, 2].map(|a| (w[0][a] + w[1][a] + w[2][a]) / 3.0);
-    let grown = w.map(|p| [0, 1, 2].map(|a| centroid[a] + (1.0 + reach) * (p[a] - centroid[a])));
-    let (least, most) = (RADIUS * (1.0 - WANDER) - FALLOFF, RADIUS * (1.0 + WANDER));
-    // Texels' coordinates are blended from the corners', not computed in
-    // the tet: a hair of rounding apart.
-    const HAIR: f64 = 1e-9;
-    // Distances from the centre over the axes `axes`: nearest (to the box)
-    // and farthest (at a corner).
-    let range = |axes: &[usize]| {
-        let mut near = 0.0;
-        let mut far: f64 = 0.0;
-        for p in &grown {
-            far = far.max(axes.iter().map(|&a| (p[a] - 0.5).powi(2)).sum::<f64>());
-        }
-        for &a in axes {
-            let lo = grown.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min);
-            let hi = grown.iter().map(|p| p[a]).fold(f64::NEG_INFINITY, f64::max);
-            let d = (lo - 0.5).max(0.5 - hi).max(0.0);
-            near += d * d;
-        }
-        (near.sqrt(), far.sqrt())
-    };
-    match kind {
-        MaskKind::Splotch => {
-            let (near, far) = range(&[0, 1, 2]);
-            if near >= most + HAIR {
-                Cover::None
-            } else if far <= least - HAIR {
-                Cover::Full
-            } else {
-                Cover::Part
-            }
-        }
-        band => {
-            let (near, far) = range(&[0, 2]);
-            let s_lo = grown.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
-            let s_hi = grown.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
-            let (in_band, out_band) = super::mask::band_bounds(band, s_lo, s_hi);
-            if near >= most + HAIR || out_band {
-                Cover::None
-            } else if far <= least - HAIR && in_band {
-                Cover::Full
-            } else {
-                Cover::Part
-            }
-        }
-    }
 }
 
 impl Interior for LstInterior {

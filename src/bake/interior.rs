@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::progress::{Progress, Span, timed};
+use crate::progress::{CancelOnly, Progress, Span, timed};
 use crate::scene::build::BakedScene;
 use crate::scene::interior::{InteriorLine, LstLine, LstRegionLine, MorphLine, TetLine};
 use crate::solid::{InteriorMethod, interior_block};
@@ -74,46 +74,73 @@ pub(super) fn interiors(
             });
             continue;
         }
-        let mut volume = timed(spans, "interior block", name, || {
-            interior_block(
-                texture,
-                &interior.photographs,
-                n,
-                interior.method,
-                k as u64,
-                progress,
-            )
-        })
-        .map_err(|e| match e {
+        // The block and the tet mesh (then the LST through it) need
+        // nothing of each other: they run side by side, the block's own
+        // progress quiet when there are tets, so the two do not fight over
+        // one bar. Their spans are listed under the interior's, whose
+        // seconds are the wall clock's.
+        let has_tets = interior.tet_mesh || interior.lst.is_some();
+        let quiet = CancelOnly(progress);
+        let block_progress: &dyn Progress = if has_tets { &quiet } else { progress };
+        let (mut block_spans, mut tet_spans) = (Vec::new(), Vec::new());
+        let (volume, tets_lst) = rayon::join(
+            || {
+                timed(&mut block_spans, "interior block", name, || {
+                    interior_block(
+                        texture,
+                        &interior.photographs,
+                        n,
+                        interior.method,
+                        k as u64,
+                        block_progress,
+                    )
+                })
+            },
+            || -> Result<_> {
+                let tets = if has_tets {
+                    Some(timed(&mut tet_spans, "tet mesh", name, || {
+                        tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)
+                    })?)
+                } else {
+                    None
+                };
+                let lst = match (&interior.lst, &tets) {
+                    (Some(spec), Some((_, tet_mesh))) => {
+                        Some(timed(&mut tet_spans, "lapped solid texture", name, || {
+                            lapped(
+                                spec,
+                                &scene.nodes[k].mesh,
+                                tet_mesh,
+                                interior.block_size,
+                                &file,
+                                k as u64,
+                                &node.name,
+                                progress,
+                            )
+                        })?)
+                    }
+                    _ => None,
+                };
+                Ok((tets, lst))
+            },
+        );
+        spans.push(Span {
+            stage: "interior".into(),
+            item: name.into(),
+            seconds: start.elapsed().as_secs_f64(),
+            parallel: false,
+        });
+        spans.extend(block_spans.into_iter().chain(tet_spans).map(|s| Span {
+            parallel: true,
+            ..s
+        }));
+        let mut volume = volume.map_err(|e| match e {
             // Ctrl-C is not the node's fault.
             Error::Cancelled => e,
             e => Error::invalid(format!("node '{}': interior: {e}", node.name)),
         })?;
         volume.spacing = interior.block_size / n as f64;
-        let tets = if interior.tet_mesh || interior.lst.is_some() {
-            Some(timed(spans, "tet mesh", name, || {
-                tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)
-            })?)
-        } else {
-            None
-        };
-        let lst = match (&interior.lst, &tets) {
-            (Some(spec), Some((_, tet_mesh))) => {
-                Some(timed(spans, "lapped solid texture", name, || {
-                    lapped(
-                        spec,
-                        &scene.nodes[k].mesh,
-                        tet_mesh,
-                        interior.block_size,
-                        &file,
-                        k as u64,
-                        &node.name,
-                        progress,
-                    )
-                })?)
-            }
-            _ => None,
-        };
+        let (tets, lst) = tets_lst?;
         out.push(Interior {
             line: InteriorLine {
                 node: node.name.clone(),

@@ -272,9 +272,19 @@ impl Bvh {
     /// `min(distance(q), upper)`: an upper bound known beforehand (the
     /// distance at a nearby point plus the way there) prunes the search.
     pub fn distance_below(&self, q: DVec3, upper: f64) -> f64 {
+        self.distance_between(q, 0.0, upper)
+    }
+
+    /// `distance_below(q, upper)` where only a distance above `lower`
+    /// matters: the search stops at the first triangle within `lower`
+    /// and returns that triangle's distance (some value <= `lower`). For
+    /// the largest of many distances (a Hausdorff distance), with the
+    /// largest so far as `lower`.
+    pub fn distance_between(&self, q: DVec3, lower: f64, upper: f64) -> f64 {
         if self.nodes.is_empty() {
             return upper;
         }
+        let lower2 = lower * lower;
         let mut best2 = upper * upper;
         let mut stack = [(0u32, 0.0f64); 64];
         let mut top = 1;
@@ -288,6 +298,9 @@ impl Bvh {
             if node.count > 0 {
                 for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
                     best2 = best2.min(closest_point(q, t).distance_squared(q));
+                }
+                if best2 <= lower2 {
+                    break;
                 }
             } else {
                 let l = i + 1;

@@ -510,7 +510,10 @@ fn one_sided(from: &TriMesh, to: &Bvh, step: f64) -> (f64, f64) {
                     let upper = (0..3)
                         .map(|m| d[m] + q.distance(p[m]))
                         .fold(f64::INFINITY, f64::min);
-                    best = best.max(to.distance_below(q, upper));
+                    // Only a sample farther than `best` raises it.
+                    if upper > best {
+                        best = best.max(to.distance_between(q, best, upper));
+                    }
                 }
             }
             (best, longest / n as f64)

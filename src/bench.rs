@@ -137,6 +137,17 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "tetra uterus",
+            min_runs: 1,
+            what: "the bundled scene's uterine wall at the default resolution (refined until the boundary is within 1% of the diagonal; about 258k tets), as its bake makes it",
+            prepare: |root| {
+                let surface = bundled_surface(root)?;
+                Ok(Box::new(move || {
+                    crate::tetra::tetrahedralise(&surface, &Default::default(), &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "synth3d layered 64",
             min_runs: 1,
             what: "layered (depth-varying) 64^3 block from database/sources/layered_wall.png, seed 002 4.2 with the sweep fix (target <= 10 s)",
@@ -233,6 +244,12 @@ pub fn workloads() -> Vec<Workload> {
                     crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
                 }))
             },
+        },
+        Workload {
+            name: "lst fill uterus",
+            min_runs: 1,
+            what: "lapped solid texture, type 1-b, the bundled scene's uterine wall at its default resolution (about 258k tets; target <= 4 s)",
+            prepare: lst_fill_uterus,
         },
         Workload {
             name: "lst cut kiwi",
@@ -474,17 +491,48 @@ fn lst_cut_step(_: &Path) -> Result<Step> {
     }))
 }
 
+/// The bundled scene's uterine wall, tetrahedralised (untimed) and lapped
+/// (1-b, serosa to cavity) as its bake does.
+fn lst_fill_uterus(root: &Path) -> Result<Step> {
+    let a = bundled_wall(root)?;
+    Ok(Box::new(move || {
+        crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
+    }))
+}
+
+/// The bundled scene's uterus, generated with its parameters.
+fn bundled_params(root: &Path) -> Result<crate::scene::uterus::CavityParams> {
+    let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
+    match &spec.nodes[0].mesh {
+        crate::scene::file::MeshSpec::UterineCavity(params) => Ok(params.clone()),
+        _ => Err(crate::Error::invalid(
+            "the bundled scene's uterus is no longer generated",
+        )),
+    }
+}
+
+/// The bundled scene's uterine surface (cavity, myomas, polyp, serosa).
+fn bundled_surface(root: &Path) -> Result<crate::mesh::TriMesh> {
+    crate::scene::uterus::generate(&bundled_params(root)?)
+        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))
+}
+
+/// The LST anchor of the bundled scene's uterine wall at the scene's
+/// parameters and the default tet resolution.
+fn bundled_wall(root: &Path) -> Result<crate::solid::lst::anchors::Anchor> {
+    let params = bundled_params(root)?;
+    uterus_wall(
+        &params,
+        &Default::default(),
+        crate::solid::lst::TextureType::Layered,
+    )
+}
+
 /// The bundled scene's uterine wall, tetrahedralised and lapped (1-b,
 /// serosa to cavity) as its bake does (untimed), cut across its width.
 fn lst_cut_uterus(root: &Path) -> Result<Step> {
     use crate::solid::lst;
-    let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
-    let crate::scene::file::MeshSpec::UterineCavity(params) = &spec.nodes[0].mesh else {
-        return Err(crate::Error::invalid(
-            "the bundled scene's uterus is no longer generated",
-        ));
-    };
-    let a = uterus_wall(params, &Default::default(), lst::TextureType::Layered)?;
+    let a = bundled_wall(root)?;
     let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
     let interior = lst::LstInterior::new(model.into(), exemplar.into())?;

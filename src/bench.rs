@@ -513,7 +513,12 @@ fn bundled_params(root: &Path) -> Result<crate::scene::uterus::CavityParams> {
 
 /// The bundled scene's uterine surface (cavity, myomas, polyp, serosa).
 fn bundled_surface(root: &Path) -> Result<crate::mesh::TriMesh> {
-    crate::scene::uterus::generate(&bundled_params(root)?)
+    uterus_surface(&bundled_params(root)?)
+}
+
+/// A generated uterus, its parameter errors as organtex errors.
+fn uterus_surface(params: &crate::scene::uterus::CavityParams) -> Result<crate::mesh::TriMesh> {
+    crate::scene::uterus::generate(params)
         .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))
 }
 
@@ -552,8 +557,7 @@ pub fn uterus_wall(
     tet_options: &crate::tetra::TetOptions,
     kind: crate::solid::lst::TextureType,
 ) -> Result<crate::solid::lst::anchors::Anchor> {
-    let surface = crate::scene::uterus::generate(params)
-        .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))?;
+    let surface = uterus_surface(params)?;
     let (depth_outer, depth_inner) =
         crate::solid::lst::facet_depth_points(&surface, "serosa", "wall")?;
     let tets = crate::tetra::tetrahedralise(&surface, tet_options, &Silent)?;

@@ -156,7 +156,7 @@ impl Lateral {
         let radius = (0..=Self::STEPS)
             .map(|i| {
                 let q = 4.0 * i as f64 / Self::STEPS as f64;
-                // The inverse of `diamond`.
+                // The direction whose `diamond` is q.
                 let (x, z) = if q < 2.0 {
                     (1.0 - q, 1.0 - (1.0 - q).abs())
                 } else {
@@ -172,14 +172,19 @@ impl Lateral {
     /// Towards the unit direction `d` (its s component 0).
     #[inline]
     fn radius(&self, d: [f64; 3]) -> f64 {
-        let (x, z) = (d[0], d[2]);
-        let u = x / (x.abs() + z.abs());
-        let q = if z >= 0.0 { 1.0 - u } else { 3.0 + u };
-        let at = q * (Self::STEPS as f64 / 4.0);
+        let at = diamond(d[0], d[2]) * (Self::STEPS as f64 / 4.0);
         let i = (at as usize).min(Self::STEPS - 1);
         let f = at - i as f64;
         self.radius[i] * (1.0 - f) + self.radius[i + 1] * f
     }
+}
+
+/// The diamond angle of the direction (x, z): 0 towards +x, rising to 4
+/// the way the angle does (1 at +z, 2 at -x, 3 at -z).
+#[inline]
+fn diamond(x: f64, z: f64) -> f64 {
+    let u = x / (x.abs() + z.abs());
+    if z >= 0.0 { 1.0 - u } else { 3.0 + u }
 }
 
 /// `Splotch::alpha` with the blob's edge towards a unit direction given.

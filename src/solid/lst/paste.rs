@@ -155,20 +155,11 @@ pub fn paste(
                 clump,
                 corners,
                 kind,
-                seed_frame,
+                angles: patch_angles,
             } = grown?;
             // Record the layers and add coverage (sec. 5.2.6).
-            let frame = |t: usize| (fields.frame_of)(t, site.draw, Some(&seed_frame));
+            angles.extend(patch_angles);
             for (&t, w) in clump.iter().zip(&corners) {
-                let c = mesh.corners(t);
-                let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
-                let j = DMat3::from_cols(w[1] - w[0], w[2] - w[0], w[3] - w[0]) * g.inverse();
-                let f = frame(t);
-                for axis in 0..3 {
-                    let v = j * f.col(axis);
-                    let cos = (v[axis] / v.length()).clamp(-1.0, 1.0);
-                    angles.push(cos.acos().to_degrees() as f32);
-                }
                 pasted.push((
                     t as u32,
                     Layer {
@@ -282,12 +273,14 @@ struct Site {
 }
 
 /// A patch grown and solved: its clump, the texture coordinates of each
-/// clump tet's corners, its mask, and the seed's frame.
+/// clump tet's corners, its mask, and per clump tet and texture axis the
+/// angle (degrees) between the tet's tensor axis carried into texture
+/// space and that axis (`Pasted::angles`).
 struct Grown {
     clump: Vec<usize>,
     corners: Vec<[DVec3; 4]>,
     kind: MaskKind,
-    seed_frame: DMat3,
+    angles: Vec<f32>,
 }
 
 /// What growing a patch reads.
@@ -433,14 +426,27 @@ impl Pasting<'_> {
                 break;
             }
         }
+        let corners: Vec<[DVec3; 4]> = clump
+            .iter()
+            .map(|&t| mesh.tets[t].map(|v| coords[local[v as usize] as usize]))
+            .collect();
+        let mut angles = Vec::with_capacity(3 * clump.len());
+        for (&t, w) in clump.iter().zip(&corners) {
+            let c = mesh.corners(t);
+            let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
+            let j = DMat3::from_cols(w[1] - w[0], w[2] - w[0], w[3] - w[0]) * g.inverse();
+            let f = frame(t);
+            for axis in 0..3 {
+                let v = j * f.col(axis);
+                let cos = (v[axis] / v.length()).clamp(-1.0, 1.0);
+                angles.push(cos.acos().to_degrees() as f32);
+            }
+        }
         Ok(Grown {
-            corners: clump
-                .iter()
-                .map(|&t| mesh.tets[t].map(|v| coords[local[v as usize] as usize]))
-                .collect(),
             clump,
+            corners,
             kind,
-            seed_frame,
+            angles,
         })
     }
 }
@@ -449,8 +455,9 @@ impl Pasting<'_> {
 /// above 0 at a corner, an edge midpoint, a face centroid or the centroid,
 /// or the texture's centre inside it (a tet larger than the mask).
 fn meets_mask(splotch: &TabulatedSplotch, kind: MaskKind, w: &[DVec3; 4]) -> bool {
-    // Whole tets out of the mask's reach, or inside its core, need no
-    // probes (the same answer: every probe lies in the tet).
+    // Whole tets inside the mask's core meet it without probes; tets where
+    // it is 0 all over do not, even one holding the texture's centre (a
+    // band's alpha is 0 there when the tet lies out of the band).
     match cover(kind, &w.map(|c| c.to_array()), 0.0) {
         Cover::None => return false,
         Cover::Full => return true,

@@ -404,12 +404,23 @@ impl Renderer {
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    // Blend layers lie over their facets; they must not
-                    // hide each other.
+                    // Blend layers lie on their facets' faces (scene::draw);
+                    // they must not hide each other, and a slope-scaled
+                    // bias (a decal's polygon offset) keeps them from
+                    // fighting the faces they cover for depth. Drawn in
+                    // order, they stack as the compositor does.
                     depth_write_enabled: Some(!blend),
                     depth_compare: Some(wgpu::CompareFunction::LessEqual),
                     stencil: Default::default(),
-                    bias: Default::default(),
+                    bias: if blend {
+                        wgpu::DepthBiasState {
+                            constant: -2,
+                            slope_scale: -1.0,
+                            clamp: 0.0,
+                        }
+                    } else {
+                        Default::default()
+                    },
                 }),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {

@@ -76,11 +76,7 @@ pub fn surface_glb(carving: &Carving) -> Result<Vec<u8>> {
         .into_iter()
         .enumerate()
         .filter(|(_, s)| !s.indices.is_empty())
-        .map(|(k, stream)| Primitive {
-            stream,
-            material: k,
-            layer: None,
-        })
+        .map(|(k, stream)| Primitive::opaque(stream, k))
         .collect();
     let list = DrawList {
         materials,

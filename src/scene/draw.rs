@@ -9,9 +9,13 @@
 //!   made from the tissue's height map;
 //! - its overlap ring, its overlay and its seam bands as further primitives
 //!   blended over the rest (alpha per vertex, overlay opacity in the
-//!   material), lifted off the surface along the normals, a hair per layer
-//!   in the order the compositor stacks them (`LayerKind`), so they never
-//!   fight each other for depth and draw in the right order.
+//!   material), in the order the compositor stacks them (`LayerKind`).
+//!   Their vertices lie on the surface. A file lifts each layer a hair per
+//!   rank along the normals (`Primitive::lift`), so a ray tracer, which has
+//!   no draw order, finds them stacked. The renderer draws them on the
+//!   surface itself, in order, with a depth bias. A lifted layer seen at a
+//!   grazing angle shows through the edge of whatever stands in front of
+//!   it within that hair, a dotted dark rim round every myoma.
 //!
 //! Moving, turning or scaling a texture changes only its material's
 //! transform, never a stream.
@@ -387,6 +391,31 @@ pub struct Primitive {
     pub material: usize,
     /// None for a facet's own opaque faces.
     pub layer: Option<LayerKind>,
+    /// How far along its normals a file lifts this layer off the surface
+    /// (object units; 0 for opaque faces).
+    pub lift: f32,
+}
+
+impl Primitive {
+    /// A facet's own faces: opaque, on the surface.
+    pub fn opaque(stream: Stream, material: usize) -> Primitive {
+        Primitive {
+            stream,
+            material,
+            layer: None,
+            lift: 0.0,
+        }
+    }
+
+    /// The stream's positions lifted by `lift` along its normals.
+    pub fn lifted_positions(&self) -> Vec<f32> {
+        let s = &self.stream;
+        s.positions
+            .iter()
+            .zip(&s.normals)
+            .map(|(p, n)| p + n * self.lift)
+            .collect()
+    }
 }
 
 /// One facet's primitives.
@@ -497,15 +526,15 @@ impl DrawList {
                 piece.alpha[v as usize],
             )
         };
-        // The faces `faces` lifted by `lift`, one vertex per uv corner.
-        let faces_stream = |faces: std::ops::Range<usize>, lift: f64, with_alpha: bool| {
+        // The faces `faces`, one vertex per uv corner.
+        let faces_stream = |faces: std::ops::Range<usize>, with_alpha: bool| {
             let mut stream = Stream::default();
             let mut id_of = HashMap::new();
             for f in faces {
                 for i in 0..3 {
                     let id = *id_of.entry(layer.triangles[f][i]).or_insert_with(|| {
                         let (p, n, uv, alpha) = corner(f, i);
-                        stream.vertex(p + n * lift, n, uv, with_alpha.then_some(alpha))
+                        stream.vertex(p, n, uv, with_alpha.then_some(alpha))
                     });
                     stream.indices.push(id);
                 }
@@ -513,20 +542,15 @@ impl DrawList {
             stream
         };
         let all = 0..piece.mesh.num_faces();
-        let own = faces_stream(0..piece.own, 0.0, false);
-        let ring = faces_stream(piece.own..all.end, above(LayerKind::Ring), true);
-        let band_stream = |kind| {
+        let own = faces_stream(0..piece.own, false);
+        let ring = faces_stream(piece.own..all.end, true);
+        let band_stream = || {
             let mut band = Stream::default();
             for bf in &facet.band {
                 for i in 0..3 {
                     // In the ring the band fades out with the ring.
                     let (p, n, _, ring_alpha) = corner(bf.face as usize, i);
-                    let id = band.vertex(
-                        p + n * above(kind),
-                        n,
-                        bf.uv[i],
-                        Some(bf.alpha[i] * ring_alpha),
-                    );
+                    let id = band.vertex(p, n, bf.uv[i], Some(bf.alpha[i] * ring_alpha));
                     band.indices.push(id);
                 }
             }
@@ -540,14 +564,15 @@ impl DrawList {
                 stream
             }
         };
-        let prim = |stream, material, layer| Primitive {
+        let layer = |stream, material, kind| Primitive {
             stream,
             material,
-            layer,
+            layer: Some(kind),
+            lift: above(kind) as f32,
         };
         let mut prims = vec![
-            prim(relief(own), opaque, None),
-            prim(relief(ring), blended, Some(LayerKind::Ring)),
+            Primitive::opaque(relief(own), opaque),
+            layer(relief(ring), blended, LayerKind::Ring),
         ];
         if let Some(o) = &s.overlay {
             let m = self.material(Material {
@@ -568,24 +593,12 @@ impl DrawList {
                 role: Role::Overlay,
             });
             // Over the own faces and the ring alike, fading with the ring.
-            let over = faces_stream(all, above(LayerKind::Overlay), true);
-            prims.push(prim(over, m, Some(LayerKind::Overlay)));
-            prims.push(prim(
-                relief(band_stream(LayerKind::Band)),
-                blended,
-                Some(LayerKind::Band),
-            ));
-            prims.push(prim(
-                band_stream(LayerKind::BandOverlay),
-                m,
-                Some(LayerKind::BandOverlay),
-            ));
+            let over = faces_stream(all, true);
+            prims.push(layer(over, m, LayerKind::Overlay));
+            prims.push(layer(relief(band_stream()), blended, LayerKind::Band));
+            prims.push(layer(band_stream(), m, LayerKind::BandOverlay));
         } else {
-            prims.push(prim(
-                relief(band_stream(LayerKind::Band)),
-                blended,
-                Some(LayerKind::Band),
-            ));
+            prims.push(layer(relief(band_stream()), blended, LayerKind::Band));
         }
         prims
     }
@@ -624,11 +637,7 @@ impl DrawList {
                 own.indices.push(id);
             }
         }
-        vec![Primitive {
-            stream: own,
-            material: m,
-            layer: None,
-        }]
+        vec![Primitive::opaque(own, m)]
     }
 }
 
@@ -696,11 +705,7 @@ impl DrawList {
                         name: name.clone(),
                         node: k,
                         facet: j,
-                        primitives: vec![Primitive {
-                            stream,
-                            material: m,
-                            layer: None,
-                        }],
+                        primitives: vec![Primitive::opaque(stream, m)],
                     });
                 }
             }

@@ -323,16 +323,18 @@ fn clearcoat(
     })
 }
 
-/// The glTF primitive of a non-empty stream.
+/// The glTF primitive of a non-empty stream, a layer lifted off the
+/// surface by its hair (a ray tracer has no draw order to stack by).
 fn primitive(
     b: &mut Builder,
-    stream: &Stream,
+    p: &Primitive,
     material: json::Index<json::Material>,
 ) -> json::mesh::Primitive {
+    let stream = &p.stream;
     let mut attributes = std::collections::BTreeMap::new();
     attributes.insert(
         Valid(json::mesh::Semantic::Positions),
-        b.floats(&stream.positions, json::accessor::Type::Vec3, true),
+        b.floats(&p.lifted_positions(), json::accessor::Type::Vec3, true),
     );
     attributes.insert(
         Valid(json::mesh::Semantic::Normals),
@@ -399,7 +401,7 @@ pub fn encode(list: &DrawList, name: &str, cameras: &[Camera]) -> Result<Vec<u8>
             .primitives
             .iter()
             .filter(|p| !p.stream.indices.is_empty())
-            .map(|p| primitive(&mut b, &p.stream, materials[p.material]))
+            .map(|p| primitive(&mut b, p, materials[p.material]))
             .collect();
         nodes.push(node(&mut b, &part.name, prims));
     }
@@ -532,11 +534,7 @@ pub fn textured_mesh(
             name: name.to_string(),
             node: 0,
             facet: 0,
-            primitives: vec![Primitive {
-                stream,
-                material: 0,
-                layer: None,
-            }],
+            primitives: vec![Primitive::opaque(stream, 0)],
         }],
     };
     encode(&list, name, &[])

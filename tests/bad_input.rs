@@ -1227,6 +1227,20 @@ fn out_of_range_numbers_in_a_scene_are_refused_at_their_line() {
         cavity("polyp = [{ at = [0.5, 0.9], stalk_radius = 0.5, stalk_length = 1e200, head_radius = 1.0 }]"),
         "mesh.uterine_cavity.polyp[0].stalk_length: must be at most 1000000".into(),
     ));
+    for v in ["nan", "-0.1", "5.0"] {
+        cases.push((
+            cavity(&format!("folds = {v}")),
+            "mesh.uterine_cavity.folds: must be from 0 to".into(),
+        ));
+    }
+    for v in ["-5.0", "60.0", "nan"] {
+        cases.push((
+            cavity(&format!(
+                "polyp = [{{ at = [0.5, 0.9], stalk_radius = 0.5, stalk_length = 1.0, head_radius = 1.0, lean = {v} }}]"
+            )),
+            "mesh.uterine_cavity.polyp[0].lean: must be from 0 to 45 degrees".into(),
+        ));
+    }
     for v in ["nan", "inf", "-1.0"] {
         cases.push((
             cavity(&format!("wall_thickness = {v}")),

@@ -992,11 +992,11 @@ fn a_scene_interior_can_be_morphed_from_photographed_cuts() {
     // The copied cuts are the morph: on the second cut's plane (y = 12)
     // the organ shows that photograph, and the block holds the morph's
     // colour at each voxel centre, placed as the report says.
-    let mesh = uterus::generate(&CavityParams {
-        wall_thickness: 10.0,
-        ..uterus::demo()
-    })
-    .unwrap();
+    let spec = organtex::scene::file::load(&scene).unwrap();
+    let organtex::scene::file::MeshSpec::UterineCavity(params) = &spec.nodes[0].mesh else {
+        panic!("myoma_cuts generates its uterus");
+    };
+    let mesh = uterus::generate(params).unwrap();
     let topology = Topology::build(&mesh).unwrap();
     let morph = organtex::solid::morph::Morph::read(
         &mesh,

@@ -83,25 +83,29 @@ fn chart_box(facet: &BakedFacet) -> (DVec2, DVec2) {
     chart_box_of(facet, |_| true)
 }
 
-/// The widest box round what the viewpoints see of a facet, in mesh units
-/// (a uterus's serosa is wide, but a hysteroscope sees it only through the
-/// canal: it must not blur the wall); every facet's whole box when nothing
-/// is seen.
+/// The widest box round what the viewpoints see of a facet, in mesh units,
+/// over the facets mostly in sight (a uterus's serosa is wide, and the
+/// hysteroscope sees of it only the ring round the canal, which its chart
+/// may spread wide: it must not blur the wall; a facet mostly out of sight
+/// gets a lower density of its own in `bake`). Every facet's seen box when
+/// none is mostly in sight, their whole boxes when nothing is seen.
 fn widest_seen(nodes: &[BakedNode]) -> f64 {
-    let widest = |keep_seen: bool| {
+    let widest = |keep_seen: bool, min_seen: f64| {
         nodes
             .iter()
             .flat_map(|n| &n.facets)
+            .filter(|f| f.report.seen >= min_seen)
             .map(|f| {
                 let (lo, hi) = chart_box_of(f, |g| !keep_seen || f.seen[g]);
                 (hi - lo).max(DVec2::ZERO).max_element()
             })
             .fold(0.0, f64::max)
     };
-    match widest(true) {
-        w if w > 0.0 => w,
-        _ => widest(false),
-    }
+    [(true, 0.5), (true, 0.0), (false, 0.0)]
+        .into_iter()
+        .map(|(keep_seen, min_seen)| widest(keep_seen, min_seen))
+        .find(|&w| w > 0.0)
+        .unwrap_or(0.0)
 }
 
 /// Atlas texels per mesh unit when the widest box round what is seen of a

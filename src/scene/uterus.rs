@@ -68,6 +68,10 @@ pub struct CavityParams {
     /// surface alone, open at the canal.
     #[serde(default)]
     pub wall_thickness: f64,
+    /// The wall's soft folds: seeded undulations along its normal, at
+    /// most this far (0, the default: a smooth pear).
+    #[serde(default)]
+    pub folds: f64,
     #[serde(default, rename = "myoma")]
     pub myomas: Vec<Myoma>,
     #[serde(default, rename = "polyp")]
@@ -101,6 +105,10 @@ pub struct Polyp {
     /// Seeded lobes round the head, a fraction of its radius; 0 round.
     #[serde(default)]
     pub irregularity: f64,
+    /// How far the head leans over, degrees: the axis bends from upright
+    /// at the base to this angle at the top, towards a seeded side.
+    #[serde(default)]
+    pub lean: f64,
 }
 
 fn one() -> f64 {
@@ -118,6 +126,7 @@ pub fn demo() -> CavityParams {
         cervix_radius: default_cervix(),
         resolution: default_resolution(),
         wall_thickness: 0.0,
+        folds: 0.8,
         myomas: vec![
             Myoma {
                 name: None,
@@ -135,11 +144,12 @@ pub fn demo() -> CavityParams {
         polyps: vec![Polyp {
             name: None,
             at: [0.9, 0.85],
-            stalk_radius: 0.8,
-            stalk_length: 3.0,
-            head_radius: 2.2,
-            elongation: 1.0,
-            irregularity: 0.0,
+            stalk_radius: 1.2,
+            stalk_length: 2.0,
+            head_radius: 2.4,
+            elongation: 1.3,
+            irregularity: 0.2,
+            lean: 25.0,
         }],
     }
 }
@@ -169,6 +179,46 @@ fn pear(p: &CavityParams, q: DVec3) -> DVec3 {
         q.y * p.depth / 2.0 * f,
         t * p.length,
     )
+}
+
+/// The wall's soft folds: a sum of seeded plane waves over the cavity, of
+/// wavelengths from a fifth to a half of its width, in -1..1. Smooth and
+/// band-limited, so the displaced wall stays as even as the pear.
+struct Folds {
+    waves: Vec<(DVec3, f64, f64)>,
+}
+
+impl Folds {
+    const WAVES: u64 = 8;
+
+    fn new(p: &CavityParams) -> Folds {
+        let u = |k: u64, i: u64| rng::unit(p.seed, &[0xf01d, k, i]);
+        let waves: Vec<(DVec3, f64, f64)> = (0..Self::WAVES)
+            .map(|k| {
+                // A uniform direction, a wavelength, a phase, an amplitude.
+                let z = 2.0 * u(k, 0) - 1.0;
+                let phi = TAU * u(k, 1);
+                let r = (1.0 - z * z).sqrt();
+                let dir = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+                let wavelength = p.width * (0.2 + 0.3 * u(k, 2));
+                (dir * (TAU / wavelength), TAU * u(k, 3), 0.5 + u(k, 4))
+            })
+            .collect();
+        let total: f64 = waves.iter().map(|w| w.2).sum();
+        Folds {
+            waves: waves
+                .into_iter()
+                .map(|(k, ph, a)| (k, ph, a / total))
+                .collect(),
+        }
+    }
+
+    fn at(&self, x: DVec3) -> f64 {
+        self.waves
+            .iter()
+            .map(|(k, ph, a)| a * (k.dot(x) + ph).sin())
+            .sum()
+    }
 }
 
 fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
@@ -272,6 +322,12 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
     // Onto the pear; remember each vertex's height fraction for the canal.
     let heights: Vec<f64> = sphere.positions.iter().map(|q| (q.z + 1.0) / 2.0).collect();
     let mut positions: Vec<DVec3> = sphere.positions.iter().map(|&q| pear(p, q)).collect();
+    if p.folds > 0.0 {
+        let fold = Folds::new(p);
+        for (x, &q) in positions.iter_mut().zip(&sphere.positions) {
+            *x += outward_normal(p, q) * (p.folds * fold.at(*x));
+        }
+    }
     let original = positions.clone();
     let mut facet_of_vertex = vec![0u32; positions.len()];
 
@@ -502,6 +558,20 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
             ),
         ));
     }
+    // Folds deeper than a twentieth of the cavity's size would crease the
+    // wall at the icosphere's spacing; deeper than half the wall, they
+    // would bring the cavity near the serosa.
+    let deepest = (0.05 * p.width.min(p.depth)).min(if p.wall_thickness > 0.0 {
+        0.5 * p.wall_thickness
+    } else {
+        f64::INFINITY
+    });
+    if !(p.folds.is_finite() && (0.0..=deepest).contains(&p.folds)) {
+        return Err(bad(
+            "folds",
+            format!("must be from 0 to {}, not {}", fmt(deepest), p.folds),
+        ));
+    }
     if !(3..=7).contains(&p.resolution) {
         return Err(bad(
             "resolution",
@@ -570,6 +640,12 @@ fn check(p: &CavityParams) -> Result<(), ParamError> {
             return Err(bad(
                 format!("polyp[{i}].irregularity"),
                 format!("must be from 0 to 0.3, not {}", pl.irregularity),
+            ));
+        }
+        if !(0.0..=45.0).contains(&pl.lean) {
+            return Err(bad(
+                format!("polyp[{i}].lean"),
+                format!("must be from 0 to 45 degrees, not {}", pl.lean),
             ));
         }
         if pl.stalk_radius >= pl.head_radius {
@@ -707,12 +783,27 @@ fn grow_polyp(
     seed: u64,
 ) -> Result<(), String> {
     let (e1, e2) = tangent_frame(site.normal);
-    // The head's lobes: two seeded harmonics round the axis.
+    // The head's lobes: two seeded harmonics round the axis, turning as
+    // they go up the head (`up`, 0 at its top to 1 at the stalk), and a
+    // seeded swelling along it, so no view shows an ellipse.
     let lobe = |k: u64| TAU * (rng::hash(seed, &[k]) % 1000) as f64 / 1000.0;
-    let (phase2, phase3) = (lobe(2), lobe(3));
-    let lobes = |a: f64| {
-        1.0 + pl.irregularity * (0.6 * (2.0 * a + phase2).cos() + 0.4 * (3.0 * a + phase3).cos())
+    let (phase2, phase3, twist, swell) = (lobe(2), lobe(3), lobe(4) - PI, lobe(5));
+    let lobes = |a: f64, up: f64| {
+        let round = 0.6 * (2.0 * a + phase2 + twist * up).cos()
+            + 0.4 * (3.0 * a + phase3 - twist * up).cos();
+        let along = (PI * 1.5 * up + swell).sin();
+        1.0 + pl.irregularity * (0.7 * round + 0.3 * along)
     };
+    // The lean: each ring moves sideways by a shear that grows with the
+    // square of its height, so the axis bends from upright at the base to
+    // `lean` at the top. A shear by height moves each level rigidly, so
+    // the surface stays embedded.
+    let lean_to = {
+        let a = lobe(6);
+        e1 * a.cos() + e2 * a.sin()
+    };
+    let top = polyp_profile(pl, site.footprint).point(0.0).1;
+    let shear = |h: f64| lean_to * (pl.lean.to_radians().tan() * h.max(0.0).powi(2) / (2.0 * top));
     let inside = |p: DVec3| {
         let d = p - site.centre;
         let flat = d - site.normal * d.dot(site.normal);
@@ -805,11 +896,12 @@ fn grow_polyp(
             .map(|&a| {
                 let (dr, dh) = rim_at(a);
                 let a = start + turn * a;
-                let r = r * (1.0 + (lobes(a) - 1.0) * on_head);
+                let r = r * (1.0 + (lobes(a, along / foot) - 1.0) * on_head);
                 positions.push(
                     site.centre
                         + (e1 * a.cos() + e2 * a.sin()) * (r + dr * ease)
-                        + site.normal * (h + dh * ease),
+                        + site.normal * (h + dh * ease)
+                        + shear(h),
                 );
                 (positions.len() - 1) as u32
             })
@@ -820,8 +912,7 @@ fn grow_polyp(
         of_face.extend(std::iter::repeat_n(owner, triangles.len() - before));
         previous = (ids, angles);
     }
-    let (_, top) = profile.point(0.0);
-    positions.push(site.centre + site.normal * top);
+    positions.push(site.centre + site.normal * top + shear(top));
     let pole = (positions.len() - 1) as u32;
     let (last, _) = &previous;
     for j in 0..last.len() {

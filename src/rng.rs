@@ -29,6 +29,15 @@ pub fn unit(seed: u64, key: &[u64]) -> f64 {
     hash(seed, key) as f64 / u64::MAX as f64
 }
 
+/// A standard normal number for `key` under `seed` (Box-Muller on two
+/// keyed uniforms).
+#[inline]
+pub fn normal(seed: u64, key: &[u64]) -> f64 {
+    let u = unit(seed, key).max(1e-300);
+    let v = hash(seed ^ 0x6a09_e667_f3bc_c909, key) as f64 / u64::MAX as f64;
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
 /// A random index in `0..n` for `key` under `seed` (n > 0).
 #[inline]
 pub fn below(seed: u64, key: &[u64], n: usize) -> usize {

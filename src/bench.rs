@@ -139,7 +139,7 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "tetra uterus",
             min_runs: 1,
-            what: "the bundled scene's uterine wall at the default resolution (refined until the boundary is within 1% of the diagonal; about 258k tets), as its bake makes it",
+            what: "the bundled scene's uterine wall at the default resolution (refined until the boundary is within 1% of the diagonal; about 190k tets), as its bake makes it",
             prepare: |root| {
                 let surface = bundled_surface(root)?;
                 Ok(Box::new(move || {
@@ -248,7 +248,7 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "lst fill uterus",
             min_runs: 1,
-            what: "lapped solid texture, type 1-b, the bundled scene's uterine wall at its default resolution (about 258k tets; target <= 4 s)",
+            what: "lapped solid texture, type 1-b, the bundled scene's uterine wall at its default resolution (about 190k tets; target <= 4 s)",
             prepare: lst_fill_uterus,
         },
         Workload {

@@ -32,19 +32,24 @@ pub fn isosurface(mesh: &TetMesh, field: &[f64]) -> Cut {
         "one field value per vertex"
     );
     let negative = |v: u32| field[v as usize] < 0.0;
-    // Whether the surface crosses a tet: most tets it misses, and they are
-    // passed over without more work (splitting every tet's corners into
-    // two vectors was most of a plane cut's time).
-    let crossed = |t: &[u32; 4]| {
-        let below = t.iter().filter(|&&v| negative(v)).count();
-        below != 0 && below != 4
-    };
+    // The tets the surface crosses, in order: most it misses, and they are
+    // passed over once, without more work (splitting every tet's corners
+    // into two vectors was most of a plane cut's time).
+    let crossed: Vec<u32> = (0..mesh.num_tets() as u32)
+        .into_par_iter()
+        .filter(|&t| {
+            let below = mesh.tets[t as usize]
+                .iter()
+                .filter(|&&v| negative(v))
+                .count();
+            below != 0 && below != 4
+        })
+        .collect();
     // The crossed edges, sorted: the cut's vertices.
-    let mut edges: Vec<u64> = mesh
-        .tets
+    let mut edges: Vec<u64> = crossed
         .par_iter()
-        .filter(|t| crossed(t))
-        .flat_map_iter(|t| {
+        .flat_map_iter(|&t| {
+            let t = mesh.tets[t as usize];
             super::mesh::TET_EDGES
                 .iter()
                 .filter(move |e| negative(t[e[0]]) != negative(t[e[1]]))
@@ -67,17 +72,12 @@ pub fn isosurface(mesh: &TetMesh, field: &[f64]) -> Cut {
         })
         .collect();
     // Triangles per tet, in tet order.
-    let per_tet: Vec<Vec<([u32; 3], u32)>> = mesh
-        .tets
-        .par_chunks(4096)
-        .enumerate()
-        .map(|(chunk, tets)| {
+    let per_tet: Vec<Vec<([u32; 3], u32)>> = crossed
+        .par_chunks(1024)
+        .map(|ids| {
             let mut out = Vec::new();
-            for (i, t) in tets.iter().enumerate() {
-                if !crossed(t) {
-                    continue;
-                }
-                let id = (chunk * 4096 + i) as u32;
+            for &id in ids {
+                let t = &mesh.tets[id as usize];
                 let (neg, pos): (Vec<u32>, Vec<u32>) = t.iter().partition(|&&v| negative(v));
                 let polygon: Vec<u32> = match (neg.len(), pos.len()) {
                     (1, 3) => pos.iter().map(|&p| vertex(neg[0], p)).collect(),

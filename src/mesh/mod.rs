@@ -13,6 +13,7 @@ pub mod halfedge;
 pub mod ids;
 pub mod info;
 pub mod io;
+pub mod ray;
 pub mod refine;
 pub mod repair;
 pub mod shapes;

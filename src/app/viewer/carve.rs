@@ -18,6 +18,7 @@ use glam::DVec3;
 
 use super::{Job, Mode, Viewer};
 use crate::error::{Error, Result};
+use crate::mesh::ray::ray_triangle;
 use crate::render::{CarveMask, CarvedFace};
 use crate::runtime::{AtlasOptions, Carving, CarvingOptions, FaceId, Model, Node, Tool};
 
@@ -207,23 +208,6 @@ impl Mask {
     }
 }
 
-/// Where the ray from `origin` along `dir` first meets triangle `t`
-/// (Moller and Trumbore), if it does.
-fn hit(origin: DVec3, dir: DVec3, [a, b, c]: [DVec3; 3]) -> Option<f64> {
-    let (e1, e2) = (b - a, c - a);
-    let p = dir.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-14 {
-        return None;
-    }
-    let s = origin - a;
-    let u = s.dot(p) / det;
-    let q = s.cross(e1);
-    let v = dir.dot(q) / det;
-    let t = e2.dot(q) / det;
-    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0).then_some(t)
-}
-
 impl Viewer {
     /// The Carve tool's panel: radius, figures, reset.
     pub(super) fn carve_panel(&mut self, ui: &mut egui::Ui) {
@@ -392,7 +376,7 @@ impl Viewer {
         let nearest = session
             .surface
             .values()
-            .filter_map(|f| hit(origin, dir, f.map(p)))
+            .filter_map(|f| ray_triangle(origin, dir, f.map(p)).filter(|&t| t > 0.0))
             .fold(None, |best: Option<f64>, t| {
                 Some(best.map_or(t, |b| b.min(t)))
             });

@@ -18,6 +18,7 @@ use std::f64::consts::TAU;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::mesh::ray::ray_triangle;
 use crate::mesh::refine::refine;
 use crate::mesh::shapes::icosphere;
 use crate::mesh::submesh::smooth_region;
@@ -701,27 +702,9 @@ fn cavity_span(positions: &[DVec3], triangles: &[[u32; 3]], site: &Site) -> f64 
     // under the site itself.
     triangles
         .iter()
-        .filter_map(|t| {
-            let [a, b, c] = t.map(|v| positions[v as usize]);
-            ray_triangle(site.centre, site.normal, a, b, c)
-        })
+        .filter_map(|t| ray_triangle(site.centre, site.normal, t.map(|v| positions[v as usize])))
         .filter(|&d| d > 0.25 * site.footprint)
         .fold(f64::INFINITY, f64::min)
-}
-
-/// Möller-Trumbore: distance along the ray to the triangle, if it hits.
-fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
-    let (e1, e2) = (b - a, c - a);
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-14 {
-        return None;
-    }
-    let s = o - a;
-    let u = s.dot(p) / det;
-    let q = s.cross(e1);
-    let v = d.dot(q) / det;
-    (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| e2.dot(q) / det)
 }
 
 /// A myoma: the wall pushed along the site's inward normal by a smooth

@@ -563,31 +563,15 @@ fn the_default_preview_looks_lit_by_an_endoscope() {
                 1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
             );
             let (o, d) = camera.ray(ndc.0, ndc.1, aspect);
-            let mut best: Option<(f64, usize)> = None;
-            for (f, t) in mesh.triangles.iter().enumerate() {
-                let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-                // Moller-Trumbore.
-                let (e1, e2) = (b - a, c - a);
-                let p = d.cross(e2);
-                let det = e1.dot(p);
-                if det.abs() < 1e-12 {
-                    continue;
-                }
-                let s = o - a;
-                let u = s.dot(p) / det;
-                let q = s.cross(e1);
-                let v = d.dot(q) / det;
-                let t = e2.dot(q) / det;
-                if u >= 0.0
-                    && v >= 0.0
-                    && u + v <= 1.0
-                    && t > 1e-9
-                    && best.is_none_or(|(bt, _)| t < bt)
-                {
-                    best = Some((t, f));
-                }
-            }
-            best
+            mesh.triangles
+                .iter()
+                .enumerate()
+                .filter_map(|(f, t)| {
+                    organtex::mesh::ray::ray_triangle(o, d, t.map(|v| mesh.positions[v as usize]))
+                        .filter(|&t| t > 1e-9)
+                        .map(|t| (t, f))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
         })
         .collect();
     let facets = mesh.facets.as_ref().expect("the uterus has facets");

@@ -13,9 +13,9 @@
 //!   Their vertices lie on the surface. A file lifts each layer a hair per
 //!   rank along the normals (`Primitive::lift`), so a ray tracer, which has
 //!   no draw order, finds them stacked. The renderer draws them on the
-//!   surface itself, in order, with a depth bias. A lifted layer seen at a
-//!   grazing angle shows through the edge of whatever stands in front of
-//!   it within that hair, a dotted dark rim round every myoma.
+//!   surface itself, in order, with a depth bias: lifted there, a layer
+//!   seen at a grazing angle showed through the edge of whatever stood in
+//!   front of it within the hair (a dotted dark rim round every myoma).
 //!
 //! Moving, turning or scaling a texture changes only its material's
 //! transform, never a stream.

@@ -51,7 +51,8 @@ pub(super) fn grow_polyp(
         let a = lobe(6);
         e1 * a.cos() + e2 * a.sin()
     };
-    let top = polyp_profile(pl, site.footprint).point(0.0).1;
+    let profile = polyp_profile(pl, site.footprint);
+    let top = profile.point(0.0).1;
     let shear = |h: f64| lean_to * (pl.lean.to_radians().tan() * h.max(0.0).powi(2) / (2.0 * top));
     let inside = |p: DVec3| {
         let d = p - site.centre;
@@ -98,7 +99,6 @@ pub(super) fn grow_polyp(
         .sum::<f64>()
         / n as f64;
 
-    let profile = polyp_profile(pl, site.footprint);
     let total = profile.arc[profile.arc.len() - 1];
     let foot = profile.arc_at_stalk_foot;
     let step = size * 0.87;

@@ -99,6 +99,7 @@ fn heat_colour(h: f32) -> vec3<f32> {
 }
 
 // FILM_RELIEF (scene::draw::FILM_RELIEF) is prepended with the globals.
+const FILM_LEVELS: f32 = 2.5;
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
@@ -114,14 +115,21 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
         let bump = material.normal.x;
         let tbn = mat3x3<f32>(t, b, n);
-        n_film = normalize(tbn * vec3<f32>(m.xy * bump * FILM_RELIEF, m.z));
+        // The film levels the relief finer than a few texels (surface
+        // tension fills the pits): it reads the normal map FILM_LEVELS mip
+        // levels coarser, so its glints are a few broad wet patches where
+        // the relief faces the scope, as in real frames, not a sparkle on
+        // every bump.
+        let mf = textureSampleBias(normal_texture, normal_sampler, in.uv, FILM_LEVELS).xyz * 2.0 - 1.0;
+        let film_relief = bump * FILM_RELIEF;
+        n_film = normalize(tbn * vec3<f32>(mf.xy * film_relief, mf.z));
         n = normalize(tbn * vec3<f32>(m.xy * bump, m.z));
         // Where the relief varies within a texel of the mip level sampled,
         // the averaged normal is shorter: its variance widens the film's
         // lobe (Toksvig 2005), so distant relief glistens as a sheen, not
         // as sparkling dots.
-        let len = length(m);
-        let variance = pow(bump * FILM_RELIEF, 2.0) * max(1.0 - len, 0.0) / max(len, 1e-3);
+        let len = length(mf);
+        let variance = pow(film_relief, 2.0) * max(1.0 - len, 0.0) / max(len, 1e-3);
         finish.coat_roughness = sqrt(sqrt(pow(finish.coat_roughness, 4.0) + variance));
     }
     if globals.flags.y > 0.5 {

@@ -183,8 +183,11 @@ pub const SCOPE_EXPOSURE: f64 = 1.1;
 /// surface reflects sees every facet of its relief, the light the tissue
 /// scatters back sees it softened, so a facet's `bump` is what its diffuse
 /// light shows and the film (the renderer's clear coat, the .glb's
-/// clearcoat normal map) shows this many times more.
-pub const FILM_RELIEF: f64 = 5.0;
+/// clearcoat normal map) shows this many times more. The renderer's film
+/// reads the relief a few mip levels coarser (facet.wgsl's FILM_LEVELS:
+/// the film levels the finest pits), where averaging has halved the
+/// slopes; glTF has no such bias, so a .glb viewer's glints are finer.
+pub const FILM_RELIEF: f64 = 10.0;
 
 /// The scope's light cone for a view `fov` degrees high and `aspect` wide
 /// to high: (outer, inner) half angles in radians. It reaches a little

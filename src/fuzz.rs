@@ -289,6 +289,35 @@ pub fn nrrd(bytes: &[u8]) {
     );
 }
 
+/// NIfTI-1 volumes (`segment::nifti::parse`). On success: every side at
+/// least 1, one value per voxel, no NaN, a finite and invertible
+/// voxel-to-world map, and writing the volume back with `to_bytes` and
+/// reading it again gives the same values and (to float precision) the
+/// same map.
+pub fn nifti(bytes: &[u8]) {
+    let Ok(v) = crate::segment::nifti::parse(bytes) else {
+        return;
+    };
+    assert!(v.size.iter().all(|&s| s >= 1), "size {:?}", v.size);
+    assert_eq!(v.values.len(), v.size.iter().product::<usize>());
+    assert!(v.values.iter().all(|x| !x.is_nan()), "a NaN value");
+    let m = v.to_world.matrix3;
+    assert!(m.is_finite() && v.to_world.translation.is_finite());
+    assert!(m.determinant() != 0.0, "singular map {m}");
+    let back = crate::segment::nifti::parse(&crate::segment::nifti::to_bytes(&v))
+        .expect("to_bytes reads back");
+    assert_eq!(back.size, v.size);
+    assert_eq!(back.values, v.values);
+    let close = |a: glam::DVec3, b: glam::DVec3| {
+        (a - b).abs().max_element() <= 1e-6 * (1.0 + a.abs().max_element())
+    };
+    let n = back.to_world.matrix3;
+    assert!(
+        close(n.x_axis, m.x_axis) && close(n.y_axis, m.y_axis) && close(n.z_axis, m.z_axis),
+        "the map does not read back: {m} vs {n}"
+    );
+}
+
 /// Tet meshes in legacy VTK (`tetra::io::parse_vtk`). On success: every
 /// position finite, every tet's four corners distinct vertices of the
 /// mesh.

@@ -25,6 +25,7 @@ pub mod render;
 pub mod rng;
 pub mod runtime;
 pub mod scene;
+pub mod segment;
 pub mod solid;
 pub mod synth;
 pub mod tetra;

@@ -32,6 +32,7 @@ const TARGETS: &[(&str, Target)] = &[
     ("scene", fuzz::scene),
     ("db_index", fuzz::db_index),
     ("nrrd", fuzz::nrrd),
+    ("nifti", fuzz::nifti),
     ("vtk", fuzz::vtk),
     ("lst", fuzz::lst),
     ("image", fuzz::image),

@@ -37,7 +37,7 @@ FLOORS = [
     ["solid"],
     ["db"],
     ["synth", "blend"],
-    ["unwrap", "tetra"],
+    ["unwrap", "tetra", "segment"],
     ["mesh"],
     ["linalg", "raster", "memory", "progress", "rng", "atomic", "digest", "fuzz", "error", "lib"],
 ]

@@ -6,6 +6,7 @@ mod db;
 mod generate;
 mod info;
 mod lst;
+mod mesh;
 mod morph;
 pub mod progress;
 mod section;
@@ -80,6 +81,10 @@ enum Command {
     /// of its triangles. A plane that misses the mesh is an error (exit
     /// status 1) and writes nothing.
     Section(section::Args),
+    /// One region of a CT or MRI segmentation (a NIfTI label map or
+    /// probability map) as a closed, manifold, smoothed surface in the
+    /// scanner's millimetres; writes .obj, .ply or .stl.
+    Mesh(mesh::Args),
     /// Fill a closed (or nearly closed) mesh with tetrahedra by isosurface
     /// stuffing: every dihedral angle in [10.7, 164.8] degrees, inside
     /// decided by the winding number so self-intersecting or slightly open
@@ -115,6 +120,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Db(args)) => db::run(args),
         Some(Command::Section(args)) => section::run(args),
         Some(Command::Tetra(args)) => tetra::run(args),
+        Some(Command::Mesh(args)) => mesh::run(args),
         Some(Command::Lst(args)) => lst::run(args),
         Some(Command::Morph(args)) => morph::run(args),
         Some(Command::View(args)) => view::run(args),

@@ -62,6 +62,24 @@ fn check_usable(path: &Path, mesh: &TriMesh) -> Result<()> {
     Ok(())
 }
 
+/// Write `mesh` by its name's ending: .obj, .ply (binary) or .stl
+/// (binary); atomic.
+pub fn write(path: &Path, mesh: &TriMesh) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("obj") => obj::write(path, mesh, None),
+        Some("ply") => ply::write(path, mesh),
+        Some("stl") => stl::write(path, mesh),
+        _ => Err(Error::format(
+            path,
+            "organtex writes meshes as .obj, .ply or .stl",
+        )),
+    }
+}
+
 /// Write `mesh` as OBJ (with its uvs), plus an .mtl mapping `texture` when
 /// given. Atomic: no half-written file is ever left behind.
 pub fn write_obj(path: &Path, mesh: &TriMesh, texture: Option<&Path>) -> Result<()> {

@@ -456,3 +456,30 @@ impl Values<'_> {
         }
     }
 }
+
+/// Write `mesh` as binary little-endian PLY (vertices as float, faces as
+/// uchar-counted int lists), atomically.
+pub fn write(path: &Path, mesh: &TriMesh) -> Result<()> {
+    crate::atomic::write_file(path, |w| {
+        write!(
+            w,
+            "ply\nformat binary_little_endian 1.0\ncomment written by organtex\n\
+             element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+            mesh.num_vertices(),
+            mesh.num_faces()
+        )?;
+        for p in &mesh.positions {
+            for c in p.to_array() {
+                w.write_all(&(c as f32).to_le_bytes())?;
+            }
+        }
+        for t in &mesh.triangles {
+            w.write_all(&[3])?;
+            for v in t {
+                w.write_all(&(*v as i32).to_le_bytes())?;
+            }
+        }
+        Ok(())
+    })
+}

@@ -195,3 +195,25 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     }
     Ok(mesh)
 }
+
+/// Write `mesh` as binary STL (each face's normal and corners as float),
+/// atomically.
+pub fn write(path: &Path, mesh: &TriMesh) -> Result<()> {
+    crate::atomic::write_file(path, |w| {
+        let mut header = [b' '; HEADER];
+        header[..20].copy_from_slice(b"written by organtex ");
+        w.write_all(&header)?;
+        w.write_all(&(mesh.num_faces() as u32).to_le_bytes())?;
+        for f in 0..mesh.num_faces() {
+            let n = mesh.face_normal(f);
+            let corners = mesh.corners(f);
+            for v in std::iter::once(n).chain(corners) {
+                for c in v.to_array() {
+                    w.write_all(&(c as f32).to_le_bytes())?;
+                }
+            }
+            w.write_all(&[0, 0])?;
+        }
+        Ok(())
+    })
+}

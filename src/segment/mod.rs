@@ -1,0 +1,224 @@
+//! Patient-specific organs from CT/MRI segmentations (issue 40): a label
+//! map or a probability map in, a closed, manifold, consistently oriented
+//! surface of one region out, in the scanner's millimetres.
+//!
+//! - `nifti`: NIfTI-1 volumes (`.nii`, `.nii.gz`) and their voxel-to-world
+//!   map;
+//! - `surface`: the region's boundary by marching tetrahedra, which never
+//!   makes a non-manifold vertex;
+//! - `smooth`: Taubin's lambda/mu smoothing, which takes the voxel
+//!   staircase away without shrinking the organ.
+
+pub mod nifti;
+pub mod smooth;
+pub mod surface;
+
+use std::path::Path;
+
+use glam::{DAffine3, DVec3};
+
+use crate::error::{Error, Result};
+use crate::mesh::TriMesh;
+use crate::progress::Progress;
+
+/// A scalar volume: one value per voxel, x fastest, and the map from voxel
+/// indices (voxel centres at whole numbers) to world millimetres.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarVolume {
+    pub size: [usize; 3],
+    pub values: Vec<f32>,
+    pub to_world: DAffine3,
+}
+
+impl ScalarVolume {
+    pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
+        (z * self.size[1] + y) * self.size[0] + x
+    }
+
+    /// The world volume of one voxel, mm^3.
+    pub fn voxel_volume(&self) -> f64 {
+        self.to_world.matrix3.determinant().abs()
+    }
+
+    /// Read a volume, by its name's ending: `.nii` or `.nii.gz`.
+    pub fn read(path: &Path) -> Result<ScalarVolume> {
+        let name = path.to_string_lossy().to_ascii_lowercase();
+        if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+            nifti::read(path)
+        } else {
+            Err(Error::format(
+                path,
+                "organtex reads segmentations from NIfTI-1 files (.nii, .nii.gz)",
+            ))
+        }
+    }
+}
+
+/// Which voxels make the region.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Region {
+    /// A label map's voxels of this label.
+    Label(i64),
+    /// A probability map's or grey volume's voxels at or above this value.
+    Threshold(f64),
+}
+
+/// Options of `mesh`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshOptions {
+    pub region: Region,
+    /// Taubin iterations (each a lambda and a mu step); 0: the raw
+    /// marching-tetrahedra surface.
+    pub smooth: usize,
+    /// Keep every connected piece, not only the largest.
+    pub all_components: bool,
+}
+
+/// What `mesh` measured.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MeshReport {
+    /// The region's voxels and their world volume, mm^3.
+    pub voxels: u64,
+    pub voxel_volume: f64,
+    /// Pieces of surface the region had, and how many were kept.
+    pub components: usize,
+    pub components_kept: usize,
+    pub vertices: usize,
+    pub faces: usize,
+    /// The enclosed volume of what was kept, mm^3.
+    pub volume: f64,
+}
+
+/// The surface of `region` in `volume`. `name` names the file in errors.
+pub fn mesh(
+    volume: &ScalarVolume,
+    name: &Path,
+    opts: &MeshOptions,
+    progress: &dyn Progress,
+) -> Result<(TriMesh, MeshReport)> {
+    let inside = select(volume, name, opts.region)?;
+    let voxels = inside.iter().filter(|&&b| b).count() as u64;
+    progress.stage("extracting the surface", volume.size[2] as u64);
+    let field = match opts.region {
+        // A label's indicator crosses 1/2 halfway between voxel centres.
+        Region::Label(_) => surface::Field::Binary(&inside),
+        Region::Threshold(t) => surface::Field::Scalar(&volume.values, t as f32),
+    };
+    let raw = surface::march(volume.size, field, progress)?;
+    let (mut mesh, components) = if opts.all_components {
+        let n = surface::components(&raw).1;
+        (raw, n)
+    } else {
+        surface::largest_component(raw)
+    };
+    let kept = if opts.all_components { components } else { 1 };
+    // Smoothing in voxel units (the grid's own isotropy), then to world.
+    smooth::taubin(&mut mesh, opts.smooth, progress)?;
+    for p in &mut mesh.positions {
+        *p = volume.to_world.transform_point3(*p);
+    }
+    // A left-handed voxel-to-world map turns the faces inside out.
+    if volume.to_world.matrix3.determinant() < 0.0 {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+    }
+    let report = MeshReport {
+        voxels,
+        voxel_volume: voxels as f64 * volume.voxel_volume(),
+        components,
+        components_kept: kept,
+        vertices: mesh.num_vertices(),
+        faces: mesh.num_faces(),
+        volume: mesh.signed_volume(),
+    };
+    Ok((mesh, report))
+}
+
+/// The region's voxels, with errors naming the file: a label absent, a
+/// region empty or filling the whole volume.
+fn select(volume: &ScalarVolume, name: &Path, region: Region) -> Result<Vec<bool>> {
+    let inside: Vec<bool> = match region {
+        Region::Label(l) => volume
+            .values
+            .iter()
+            .map(|&v| v as f64 == l as f64)
+            .collect(),
+        Region::Threshold(t) => {
+            if !t.is_finite() {
+                return Err(Error::invalid(format!("the threshold {t} is not a number")));
+            }
+            volume.values.iter().map(|&v| v as f64 >= t).collect()
+        }
+    };
+    let count = inside.iter().filter(|&&b| b).count();
+    if count == 0 {
+        return Err(Error::format(
+            name,
+            match region {
+                Region::Label(l) => {
+                    format!(
+                        "no voxel has label {l} (labels present: {})",
+                        labels(volume)
+                    )
+                }
+                Region::Threshold(t) => {
+                    let max = volume.values.iter().copied().fold(f32::MIN, f32::max);
+                    format!("no voxel reaches the threshold {t} (the largest value is {max})")
+                }
+            },
+        ));
+    }
+    if count == inside.len() {
+        return Err(Error::format(
+            name,
+            "the region fills the whole volume: no boundary inside it to mesh",
+        ));
+    }
+    Ok(inside)
+}
+
+/// The first few distinct whole values of a label map, for an error.
+fn labels(volume: &ScalarVolume) -> String {
+    let mut seen = std::collections::BTreeSet::new();
+    for &v in &volume.values {
+        if v.fract() == 0.0 {
+            seen.insert(v as i64);
+        }
+        if seen.len() > 12 {
+            break;
+        }
+    }
+    let list: Vec<String> = seen.iter().take(12).map(|l| l.to_string()).collect();
+    if list.is_empty() {
+        "none: the values are not whole numbers; a probability map takes a threshold".into()
+    } else {
+        list.join(", ")
+    }
+}
+
+/// The world box of a region's voxels (their centres), for checks.
+pub fn region_box(volume: &ScalarVolume, inside: impl Fn(f32) -> bool) -> Option<(DVec3, DVec3)> {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let [nx, ny, nz] = volume.size;
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                if inside(volume.values[volume.index(x, y, z)]) {
+                    for corner in 0..8 {
+                        let c = DVec3::new(
+                            x as f64 + if corner & 1 != 0 { 0.5 } else { -0.5 },
+                            y as f64 + if corner & 2 != 0 { 0.5 } else { -0.5 },
+                            z as f64 + if corner & 4 != 0 { 0.5 } else { -0.5 },
+                        );
+                        let w = volume.to_world.transform_point3(c);
+                        lo = lo.min(w);
+                        hi = hi.max(w);
+                    }
+                }
+            }
+        }
+    }
+    lo.is_finite().then_some((lo, hi))
+}

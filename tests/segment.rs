@@ -1,0 +1,309 @@
+//! Segmentations to surfaces (issue 40): NIfTI-1 read with its
+//! voxel-to-world map, the region's surface closed, manifold and turned
+//! outward, in world millimetres, with its voxels' volume; real MRI data
+//! (the MNI ICBM152 white matter and head); bad files refused by name.
+
+mod common;
+use common::organtex;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use glam::{DAffine3, DMat3, DQuat, DVec3};
+use organtex::mesh::info::analyse;
+use organtex::progress::Silent;
+use organtex::segment::{self, MeshOptions, Region, ScalarVolume, nifti};
+
+fn volumes(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/volumes")
+        .join(name)
+}
+
+/// An ellipsoid of label 3 inside a box of label 1, on 0 background.
+fn labelled(to_world: DAffine3) -> ScalarVolume {
+    let size = [24, 20, 16];
+    let mut values = Vec::new();
+    for z in 0..size[2] {
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let p = DVec3::new(x as f64 - 11.0, y as f64 - 9.5, z as f64 - 7.0);
+                let e = (p / DVec3::new(8.0, 6.0, 4.5)).length_squared();
+                let inner = (2..22).contains(&x) && (2..18).contains(&y) && (2..14).contains(&z);
+                values.push(if e <= 1.0 {
+                    3.0
+                } else if inner {
+                    1.0
+                } else {
+                    0.0
+                });
+            }
+        }
+    }
+    ScalarVolume {
+        size,
+        values,
+        to_world,
+    }
+}
+
+/// Closed, manifold, every face turned out of the region; its genus.
+fn check_surface(mesh: &organtex::mesh::TriMesh, what: &str) -> Vec<i64> {
+    let r = analyse(mesh.clone(), false)
+        .unwrap_or_else(|e| panic!("{what}: {e}"))
+        .report;
+    assert_eq!(r.boundary_edges, 0, "{what}: open");
+    assert_eq!(r.defects.non_manifold_edges, 0, "{what}");
+    assert_eq!(r.defects.non_manifold_vertices, 0, "{what}");
+    assert_eq!(r.defects.inconsistent_edges, 0, "{what}");
+    assert_eq!(r.normals, Some("outward"), "{what}");
+    r.genus
+}
+
+fn write_nii(dir: &Path, name: &str, volume: &ScalarVolume, gzip: bool) -> PathBuf {
+    let path = dir.join(name);
+    let bytes = nifti::to_bytes(volume);
+    let mut f = std::fs::File::create(&path).unwrap();
+    if gzip {
+        let mut gz = flate2::write::GzEncoder::new(f, flate2::Compression::fast());
+        gz.write_all(&bytes).unwrap();
+        gz.finish().unwrap();
+    } else {
+        f.write_all(&bytes).unwrap();
+    }
+    path
+}
+
+#[test]
+fn a_label_lands_in_world_millimetres_through_the_files_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    // Anisotropic voxels, one axis flipped (a left-handed map, as radiology
+    // files often are) and an offset: the world box is the voxels' box
+    // through it.
+    let flipped = DAffine3 {
+        matrix3: DMat3::from_diagonal(DVec3::new(-0.8, 1.25, 2.0)),
+        translation: DVec3::new(40.0, -12.0, 7.5),
+    };
+    // A turned frame: the same region, its centre where the map puts it.
+    let turned = DAffine3 {
+        matrix3: DMat3::from_quat(DQuat::from_euler(glam::EulerRot::ZYX, 0.5, 0.3, -0.2))
+            * DMat3::from_diagonal(DVec3::new(0.7, 0.7, 1.5)),
+        translation: DVec3::new(-90.0, 126.0, -72.0),
+    };
+    for (k, to_world) in [flipped, turned].into_iter().enumerate() {
+        let volume = labelled(to_world);
+        let path = write_nii(dir.path(), &format!("seg{k}.nii.gz"), &volume, k == 0);
+        let read = ScalarVolume::read(&path).unwrap();
+        assert_eq!(read.size, volume.size);
+        assert_eq!(read.values, volume.values);
+        for (a, b) in [
+            (read.to_world.matrix3.x_axis, to_world.matrix3.x_axis),
+            (read.to_world.matrix3.y_axis, to_world.matrix3.y_axis),
+            (read.to_world.matrix3.z_axis, to_world.matrix3.z_axis),
+            (read.to_world.translation, to_world.translation),
+        ] {
+            assert!(a.abs_diff_eq(b, 1e-5), "{a} vs {b}");
+        }
+        let opts = MeshOptions {
+            region: Region::Label(3),
+            smooth: 0,
+            all_components: false,
+        };
+        let (mesh, report) = segment::mesh(&read, &path, &opts, &Silent).unwrap();
+        assert_eq!(check_surface(&mesh, "ellipsoid"), vec![0]);
+        let voxel = read.voxel_volume();
+        assert!(
+            (report.volume / report.voxel_volume - 1.0).abs() < 0.03,
+            "{report:?}"
+        );
+        let (lo, hi) = mesh.bounding_box().unwrap();
+        if k == 0 {
+            // Axis-aligned: the box of the voxels' faces, within half a
+            // voxel (the surface passes halfway between centres).
+            let (blo, bhi) = segment::region_box(&read, |v| v == 3.0).unwrap();
+            let half = DVec3::new(0.4, 0.625, 1.0);
+            assert!(
+                (lo - blo).abs().cmple(half + 1e-9).all()
+                    && (hi - bhi).abs().cmple(half + 1e-9).all(),
+                "mesh box {lo}..{hi}, voxel box {blo}..{bhi}"
+            );
+            assert!((lo - blo).abs().max_element() < 1e-6, "{lo} vs {blo}");
+        } else {
+            // Turned: the surface's centroid is the region's, through the
+            // map, within half a voxel; and taken back into voxel space the
+            // surface spans the label's voxels.
+            let centroid = mesh.positions.iter().sum::<DVec3>() / mesh.num_vertices() as f64;
+            let want = to_world.transform_point3(DVec3::new(11.0, 9.5, 7.0));
+            assert!(centroid.distance(want) < 0.35, "{centroid} vs {want}");
+            let back = to_world.inverse();
+            let (mut vlo, mut vhi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+            for p in &mesh.positions {
+                let q = back.transform_point3(*p);
+                vlo = vlo.min(q);
+                vhi = vhi.max(q);
+            }
+            let (mut ilo, mut ihi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+            for z in 0..read.size[2] {
+                for y in 0..read.size[1] {
+                    for x in 0..read.size[0] {
+                        if read.values[read.index(x, y, z)] == 3.0 {
+                            let c = DVec3::new(x as f64, y as f64, z as f64);
+                            ilo = ilo.min(c);
+                            ihi = ihi.max(c);
+                        }
+                    }
+                }
+            }
+            assert!(vlo.abs_diff_eq(ilo - 0.5, 1e-6), "{vlo} vs {ilo}");
+            assert!(vhi.abs_diff_eq(ihi + 0.5, 1e-6), "{vhi} vs {ihi}");
+            assert!(voxel > 0.0 && (lo - hi).length() > 10.0);
+        }
+    }
+}
+
+#[test]
+fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
+    let path = volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz");
+    let volume = ScalarVolume::read(&path).unwrap();
+    assert_eq!(volume.size, [197, 233, 189]);
+    // The probability is stored as 0..255: 0.5 is 127.5.
+    let opts = MeshOptions {
+        region: Region::Threshold(127.5),
+        smooth: 20,
+        all_components: false,
+    };
+    let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
+    let genus = check_surface(&mesh, "white matter");
+    println!("white matter: {report:?}, genus {genus:?}");
+    assert!(genus[0] > 0, "the white matter's surface has handles");
+    let ratio = report.volume / report.voxel_volume;
+    assert!((ratio - 1.0).abs() <= 0.01, "volume {ratio}");
+    // In the MNI frame: the brain's box spans about -70..70 mm in x.
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    assert!(
+        lo.x < -55.0 && hi.x > 55.0 && lo.x > -99.0 && hi.x < 99.0,
+        "{lo}..{hi}"
+    );
+    // Same bytes on one thread.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| segment::mesh(&volume, &path, &opts, &Silent).unwrap().0);
+    assert_eq!(one.positions, mesh.positions);
+    assert_eq!(one.triangles, mesh.triangles);
+}
+
+#[test]
+fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("head.ply");
+    let path = volumes("mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
+    let (ok, stdout, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--threshold",
+        "40",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(figures["genus"], serde_json::json!([0]), "{stdout}");
+    assert_eq!(figures["closed"], true);
+    assert_eq!(figures["manifold"], true);
+    assert_eq!(figures["normals"], "outward");
+    let ratio = figures["volume"].as_f64().unwrap() / figures["voxel_volume"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() <= 0.01, "{stdout}");
+    // The written file reads back as the same closed surface.
+    let mesh = organtex::mesh::io::read(&out).unwrap();
+    assert_eq!(check_surface(&mesh, "head.ply"), vec![0]);
+    assert_eq!(mesh.num_faces() as u64, figures["faces"].as_u64().unwrap());
+}
+
+#[test]
+fn bad_segmentations_are_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = nifti::to_bytes(&labelled(DAffine3::IDENTITY));
+    let with = |edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = good.clone();
+        edit(&mut b);
+        b
+    };
+    let cases: Vec<(&str, Vec<u8>, &[&str], &str)> = vec![
+        (
+            "truncated",
+            good[..good.len() - 100].to_vec(),
+            &["--label", "3"],
+            "truncated",
+        ),
+        (
+            "short",
+            good[..200].to_vec(),
+            &["--label", "3"],
+            "a NIfTI-1 header alone is 348",
+        ),
+        (
+            "magic",
+            with(&|b| b[344..348].copy_from_slice(b"xyz\0")),
+            &["--label", "3"],
+            "magic",
+        ),
+        (
+            "notnifti",
+            b"GIF89a not a volume at all".to_vec(),
+            &["--label", "3"],
+            "not a NIfTI-1 file",
+        ),
+        (
+            "4d",
+            with(&|b| {
+                b[40..42].copy_from_slice(&4i16.to_le_bytes());
+                b[48..50].copy_from_slice(&2i16.to_le_bytes());
+            }),
+            &["--label", "3"],
+            "a 4D volume (dim[4] = 2 time points)",
+        ),
+        (
+            "singular",
+            with(&|b| b[296..312].copy_from_slice(&[0u8; 16])),
+            &["--label", "3"],
+            "direction matrix is singular",
+        ),
+        (
+            "absent",
+            good.clone(),
+            &["--label", "7"],
+            "no voxel has label 7 (labels present: 0, 1, 3)",
+        ),
+        (
+            "empty",
+            good.clone(),
+            &["--threshold", "9"],
+            "no voxel reaches the threshold 9",
+        ),
+        (
+            "full",
+            good.clone(),
+            &["--threshold", "-1"],
+            "the region fills the whole volume",
+        ),
+    ];
+    for (name, bytes, args, expect) in cases {
+        let file = dir.path().join(format!("{name}.nii"));
+        std::fs::write(&file, bytes).unwrap();
+        let out = dir.path().join(format!("{name}.obj"));
+        let mut all = vec!["mesh", file.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        all.extend(args);
+        let (ok, _, stderr) = organtex(&all);
+        assert!(!ok, "{name}: accepted");
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert!(stderr.contains(file.to_str().unwrap()), "{name}: {stderr}");
+        assert!(
+            stderr.contains(expect),
+            "{name}: expected `{expect}` in {stderr}"
+        );
+        assert!(!out.exists(), "{name}: wrote {}", out.display());
+    }
+}

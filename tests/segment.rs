@@ -108,6 +108,7 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
             region: Region::Label(3),
             smooth: 0,
             all_components: false,
+            faces: None,
         };
         let (mesh, report) = segment::mesh(&read, &path, &opts, &Silent).unwrap();
         assert_eq!(check_surface(&mesh, "ellipsoid"), vec![0]);
@@ -171,6 +172,7 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
         region: Region::Threshold(127.5),
         smooth: 20,
         all_components: false,
+        faces: None,
     };
     let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
     let genus = check_surface(&mesh, "white matter");
@@ -220,6 +222,32 @@ fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
     let mesh = organtex::mesh::io::read(&out).unwrap();
     assert_eq!(check_surface(&mesh, "head.ply"), vec![0]);
     assert_eq!(mesh.num_faces() as u64, figures["faces"].as_u64().unwrap());
+    // Decimated to 50k faces: still closed, manifold, genus 0, its volume
+    // and no angle under the decimation's floor.
+    let small = dir.path().join("head50k.stl");
+    let (ok, stdout, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--threshold",
+        "40",
+        "--faces",
+        "50000",
+        "-o",
+        small.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let f: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert!(f["faces"].as_u64().unwrap() <= 50_000, "{stdout}");
+    assert_eq!(f["genus"], serde_json::json!([0]), "{stdout}");
+    let ratio = f["volume"].as_f64().unwrap() / f["voxel_volume"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() <= 0.01, "{stdout}");
+    assert!(
+        f["min_angle"].as_f64().unwrap() >= organtex::mesh::decimate::MIN_ANGLE,
+        "{stdout}"
+    );
+    let mesh = organtex::mesh::io::read(&small).unwrap();
+    assert_eq!(check_surface(&mesh, "head50k.stl"), vec![0]);
 }
 
 #[test]

@@ -38,6 +38,12 @@ pub struct Args {
     /// Keep every connected piece of the surface (default: the largest).
     #[arg(long)]
     all_components: bool,
+    /// Decimate to at most this many faces: quadric error edge collapses
+    /// that keep the surface closed, manifold and of the same genus, no
+    /// angle made smaller than 20 degrees (default: every face marching
+    /// tetrahedra made, about two per boundary voxel face).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(4..=1_000_000_000))]
+    faces: Option<u64>,
     /// Print the figures as JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -83,6 +89,7 @@ pub fn run(args: Args) -> Result<()> {
         region,
         smooth: args.smooth as usize,
         all_components: args.all_components,
+        faces: args.faces.map(|f| f as usize),
     };
     let bars = Bars::new();
     let (mesh, report) = segment::mesh(&volume, &args.volume, &opts, &bars)?;
@@ -135,9 +142,10 @@ pub fn run(args: Args) -> Result<()> {
         f.normals.unwrap_or("mixed")
     );
     println!(
-        "  enclosed volume {:.1} mm^3 ({:+.2}% of the voxels'), {:.2} s",
+        "  enclosed volume {:.1} mm^3 ({:+.2}% of the voxels'), smallest angle {:.1} deg, {:.2} s",
         f.report.volume,
         100.0 * (f.report.volume / f.report.voxel_volume - 1.0),
+        f.report.min_angle,
         f.seconds
     );
     println!("wrote {}", f.output.display());

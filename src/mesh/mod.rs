@@ -4,6 +4,7 @@
 
 pub mod components;
 pub mod curvature;
+pub mod decimate;
 pub mod defects;
 pub(crate) mod dsu;
 pub mod edges;

@@ -72,7 +72,13 @@ pub struct MeshOptions {
     pub smooth: usize,
     /// Keep every connected piece, not only the largest.
     pub all_components: bool,
+    /// Decimate to at most this many faces (quadric error collapses that
+    /// keep the surface manifold, then tangential relaxation).
+    pub faces: Option<usize>,
 }
+
+/// Tangential relaxation rounds after decimating.
+const RELAX_ROUNDS: usize = 5;
 
 /// What `mesh` measured.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -87,6 +93,8 @@ pub struct MeshReport {
     pub faces: usize,
     /// The enclosed volume of what was kept, mm^3.
     pub volume: f64,
+    /// The smallest angle of any face, degrees.
+    pub min_angle: f64,
 }
 
 /// The surface of `region` in `volume`. `name` names the file in errors.
@@ -123,6 +131,12 @@ pub fn mesh(
             t.swap(1, 2);
         }
     }
+    // In world units, where the angles the decimation keeps are the ones
+    // a user measures.
+    if let Some(budget) = opts.faces.filter(|&b| b < mesh.num_faces()) {
+        mesh = crate::mesh::decimate::decimate(&mesh, budget, RELAX_ROUNDS, progress)
+            .map_err(|e| e.in_file(name))?;
+    }
     let report = MeshReport {
         voxels,
         voxel_volume: voxels as f64 * volume.voxel_volume(),
@@ -131,6 +145,12 @@ pub fn mesh(
         vertices: mesh.num_vertices(),
         faces: mesh.num_faces(),
         volume: mesh.signed_volume(),
+        min_angle: (0..mesh.num_faces())
+            .map(|f| {
+                let [a, b, c] = mesh.corners(f);
+                crate::mesh::decimate::min_angle(a, b, c)
+            })
+            .fold(180.0, f64::min),
     };
     Ok((mesh, report))
 }

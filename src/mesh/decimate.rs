@@ -1,0 +1,471 @@
+//! Decimation of a closed manifold surface to a face budget by quadric
+//! error edge collapses (Garland and Heckbert 1997), keeping it closed,
+//! manifold, of the same genus and without flipped or needle faces; then
+//! tangential relaxation, which evens the triangles' shapes without moving
+//! the surface off itself.
+//!
+//! Written here: the crates that decimate (meshopt's simplifier among them)
+//! work on index buffers without a manifold guarantee (they may pinch the
+//! surface or close a handle), which the unwrap and the tet mesher after
+//! this stage cannot take.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use glam::{DMat3, DVec3};
+
+use crate::error::{Error, Result};
+use crate::mesh::TriMesh;
+use crate::progress::{self, Progress};
+
+/// No collapse may leave the faces it moves with an angle below this
+/// (degrees), or below the smallest angle they had, if that is less.
+/// Issue 40 asks for 20 at 50k faces; with 20 the MNI head stops at 97k
+/// faces of a 50k budget (marching tetrahedra's own faces are thinner, and
+/// the guard keeps them from being collapsed into better ones): edge flips
+/// and remeshing are the next step.
+pub const MIN_ANGLE: f64 = 12.0;
+/// Nor turn a face by more than this (degrees).
+const MAX_TURN: f64 = 60.0;
+
+/// A symmetric 4x4 quadric, its upper triangle.
+#[derive(Clone, Copy, Default)]
+struct Quadric([f64; 10]);
+
+impl Quadric {
+    fn of_plane(n: DVec3, d: f64, weight: f64) -> Quadric {
+        let (a, b, c) = (n.x, n.y, n.z);
+        Quadric(
+            [
+                a * a,
+                a * b,
+                a * c,
+                a * d,
+                b * b,
+                b * c,
+                b * d,
+                c * c,
+                c * d,
+                d * d,
+            ]
+            .map(|x| x * weight),
+        )
+    }
+
+    fn add(&self, o: &Quadric) -> Quadric {
+        Quadric(std::array::from_fn(|k| self.0[k] + o.0[k]))
+    }
+
+    fn error(&self, p: DVec3) -> f64 {
+        let q = &self.0;
+        let (x, y, z) = (p.x, p.y, p.z);
+        q[0] * x * x
+            + 2.0 * q[1] * x * y
+            + 2.0 * q[2] * x * z
+            + 2.0 * q[3] * x
+            + q[4] * y * y
+            + 2.0 * q[5] * y * z
+            + 2.0 * q[6] * y
+            + q[7] * z * z
+            + 2.0 * q[8] * z
+            + q[9]
+    }
+
+    /// The point of least error, when the quadric pins one.
+    fn optimum(&self) -> Option<DVec3> {
+        let q = &self.0;
+        let m = DMat3::from_cols(
+            DVec3::new(q[0], q[1], q[2]),
+            DVec3::new(q[1], q[4], q[5]),
+            DVec3::new(q[2], q[5], q[7]),
+        );
+        let scale = q[0] + q[4] + q[7];
+        if m.determinant().abs() <= 1e-9 * scale * scale * scale {
+            return None;
+        }
+        let p = m.inverse() * -DVec3::new(q[3], q[6], q[8]);
+        p.is_finite().then_some(p)
+    }
+}
+
+/// A candidate collapse of edge (a, b) to `to`, valid while both ends'
+/// stamps are as they were.
+struct Candidate {
+    cost: f64,
+    a: u32,
+    b: u32,
+    stamps: (u32, u32),
+    to: DVec3,
+}
+
+impl PartialEq for Candidate {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Candidate {}
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Candidate {
+    /// The cheapest first (a max-heap reversed), ties by the edge.
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.cost
+            .total_cmp(&self.cost)
+            .then_with(|| (o.a, o.b).cmp(&(self.a, self.b)))
+    }
+}
+
+/// The smallest angle of triangle (a, b, c), degrees.
+pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let angle = |p: DVec3, q: DVec3, r: DVec3| (q - p).angle_between(r - p).to_degrees();
+    angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
+}
+
+struct State {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    alive: Vec<bool>,
+    /// Faces at each vertex (dead ones dropped lazily).
+    faces_at: Vec<Vec<u32>>,
+    quadrics: Vec<Quadric>,
+    stamps: Vec<u32>,
+    removed: Vec<bool>,
+}
+
+impl State {
+    fn live_faces(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        self.faces_at[v as usize]
+            .iter()
+            .copied()
+            .filter(|&f| self.alive[f as usize])
+    }
+
+    fn neighbours(&self, v: u32) -> Vec<u32> {
+        let mut n: Vec<u32> = self
+            .live_faces(v)
+            .flat_map(|f| self.triangles[f as usize])
+            .filter(|&w| w != v)
+            .collect();
+        n.sort_unstable();
+        n.dedup();
+        n
+    }
+
+    fn candidate(&self, a: u32, b: u32) -> Candidate {
+        let (a, b) = (a.min(b), a.max(b));
+        let q = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let mid = (pa + pb) / 2.0;
+        // The optimum when it lies near the edge (far away it is a
+        // degenerate quadric's artefact), else the best of ends and middle.
+        let near = |p: DVec3| p.distance(mid) <= pa.distance(pb);
+        let to = match q.optimum().filter(|&p| near(p)) {
+            Some(p) => p,
+            None => [pa, pb, mid]
+                .into_iter()
+                .min_by(|x, y| q.error(*x).total_cmp(&q.error(*y)))
+                .expect("three points"),
+        };
+        Candidate {
+            cost: q.error(to).max(0.0),
+            a,
+            b,
+            stamps: (self.stamps[a as usize], self.stamps[b as usize]),
+            to,
+        }
+    }
+
+    /// Whether collapsing (a, b) to `to` keeps the surface manifold (the
+    /// link condition: the ends share exactly the two opposite vertices)
+    /// and every face it moves unflipped and not needle-thin.
+    fn allowed(&self, a: u32, b: u32, to: DVec3) -> bool {
+        let (na, nb) = (self.neighbours(a), self.neighbours(b));
+        let shared = na.iter().filter(|v| nb.binary_search(v).is_ok()).count();
+        let across = self
+            .live_faces(a)
+            .filter(|&f| self.triangles[f as usize].contains(&b))
+            .count();
+        if across != 2 || shared != 2 {
+            return false;
+        }
+        let turn = MAX_TURN.to_radians().cos();
+        // The faces that move: none may flip or turn far, and the worst
+        // angle among them may fall only to MIN_ANGLE (or to what it was).
+        let (mut worst_old, mut worst_new) = (f64::INFINITY, f64::INFINITY);
+        for v in [a, b] {
+            for f in self.live_faces(v) {
+                let t = self.triangles[f as usize];
+                let old = t.map(|w| self.positions[w as usize]);
+                worst_old = worst_old.min(min_angle(old[0], old[1], old[2]));
+                if t.contains(&a) && t.contains(&b) {
+                    continue;
+                }
+                let new = t.map(|w| {
+                    if w == a || w == b {
+                        to
+                    } else {
+                        self.positions[w as usize]
+                    }
+                });
+                let (n0, n1) = (
+                    (old[1] - old[0]).cross(old[2] - old[0]),
+                    (new[1] - new[0]).cross(new[2] - new[0]),
+                );
+                if n1.length_squared() == 0.0 || n0.normalize().dot(n1.normalize()) < turn {
+                    return false;
+                }
+                worst_new = worst_new.min(min_angle(new[0], new[1], new[2]));
+            }
+        }
+        worst_new >= worst_old.min(MIN_ANGLE)
+    }
+
+    fn collapse(&mut self, a: u32, b: u32, to: DVec3) {
+        for f in self.faces_at[b as usize].clone() {
+            if !self.alive[f as usize] {
+                continue;
+            }
+            let t = &mut self.triangles[f as usize];
+            if t.contains(&a) {
+                self.alive[f as usize] = false;
+            } else {
+                for w in t.iter_mut() {
+                    if *w == b {
+                        *w = a;
+                    }
+                }
+                self.faces_at[a as usize].push(f);
+            }
+        }
+        self.faces_at[b as usize].clear();
+        self.removed[b as usize] = true;
+        self.positions[a as usize] = to;
+        self.quadrics[a as usize] = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
+        let alive = &self.alive;
+        self.faces_at[a as usize].retain(|&f| alive[f as usize]);
+        self.stamps[a as usize] += 1;
+        self.stamps[b as usize] += 1;
+    }
+}
+
+/// Collapse edges of `mesh` (closed and manifold) until it has at most
+/// `faces` faces or no collapse is allowed; then `relax` rounds of
+/// tangential relaxation. Deterministic (one thread, ties broken by the
+/// edge). The error names why the budget was not reached.
+pub fn decimate(
+    mesh: &TriMesh,
+    faces: usize,
+    relax: usize,
+    progress: &dyn Progress,
+) -> Result<TriMesh> {
+    let n = mesh.num_vertices();
+    let mut s = State {
+        positions: mesh.positions.clone(),
+        triangles: mesh.triangles.clone(),
+        alive: vec![true; mesh.num_faces()],
+        faces_at: vec![Vec::new(); n],
+        quadrics: vec![Quadric::default(); n],
+        stamps: vec![0; n],
+        removed: vec![false; n],
+    };
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+        let cross = (b - a).cross(c - a);
+        let area = cross.length() / 2.0;
+        if area > 0.0 {
+            let nrm = cross / (2.0 * area);
+            let q = Quadric::of_plane(nrm, -nrm.dot(a), area);
+            for &v in t {
+                s.quadrics[v as usize] = s.quadrics[v as usize].add(&q);
+            }
+        }
+        for &v in t {
+            s.faces_at[v as usize].push(f as u32);
+        }
+    }
+    let mut heap = BinaryHeap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a < b {
+                heap.push(s.candidate(a, b));
+            }
+        }
+    }
+    let mut live = mesh.num_faces();
+    // A tetrahedron is the smallest closed surface: the link condition
+    // would let it fold into a doubled triangle.
+    let mut vertices = mesh.num_vertices();
+    let start = live;
+    progress.stage("decimating", start.saturating_sub(faces) as u64);
+    let mut since_check = 0;
+    while live > faces {
+        let Some(c) = heap.pop() else { break };
+        let (a, b) = (c.a, c.b);
+        if s.removed[a as usize]
+            || s.removed[b as usize]
+            || c.stamps != (s.stamps[a as usize], s.stamps[b as usize])
+        {
+            continue;
+        }
+        if vertices <= 4 || !s.allowed(a, b, c.to) {
+            continue;
+        }
+        s.collapse(a, b, c.to);
+        live -= 2;
+        vertices -= 1;
+        for w in s.neighbours(a) {
+            heap.push(s.candidate(a, w));
+        }
+        since_check += 2;
+        if since_check >= 4096 {
+            progress::check(progress)?;
+            progress.advance(since_check as u64);
+            since_check = 0;
+        }
+    }
+    if live > faces {
+        return Err(Error::invalid(format!(
+            "decimation stopped at {live} faces, above the budget of {faces}: no further \
+             collapse keeps the surface manifold with its angles at least {MIN_ANGLE} degrees"
+        )));
+    }
+    // Compact, vertices in order of use.
+    let mut new_id = vec![u32::MAX; n];
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for (f, t) in s.triangles.iter().enumerate() {
+        if !s.alive[f] {
+            continue;
+        }
+        triangles.push(t.map(|v| {
+            if new_id[v as usize] == u32::MAX {
+                new_id[v as usize] = positions.len() as u32;
+                positions.push(s.positions[v as usize]);
+            }
+            new_id[v as usize]
+        }));
+    }
+    let mut out = TriMesh::new(positions, triangles);
+    relax_tangentially(&mut out, relax);
+    Ok(out)
+}
+
+/// Rounds of tangential relaxation: each vertex moves halfway to its
+/// neighbours' centroid within its tangent plane (the normal component of
+/// the move dropped), where that flips no face round it and leaves the
+/// smallest angle among them no smaller. Evens the faces' shapes; the surface
+/// stays where it was to second order.
+fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
+    let n = mesh.num_vertices();
+    let mut faces_at = vec![Vec::new(); n];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for &v in t {
+            faces_at[v as usize].push(f as u32);
+        }
+    }
+    for _ in 0..rounds {
+        for (v, ring) in faces_at.iter().enumerate() {
+            let mut normal = DVec3::ZERO;
+            let mut centroid = DVec3::ZERO;
+            let mut count = 0.0;
+            for &f in ring {
+                let t = mesh.triangles[f as usize];
+                let [a, b, c] = t.map(|w| mesh.positions[w as usize]);
+                normal += (b - a).cross(c - a);
+                for &w in &t {
+                    if w as usize != v {
+                        centroid += mesh.positions[w as usize];
+                        count += 1.0;
+                    }
+                }
+            }
+            if count == 0.0 || normal.length_squared() == 0.0 {
+                continue;
+            }
+            let normal = normal.normalize();
+            let p = mesh.positions[v];
+            let step = (centroid / count - p) * 0.5;
+            let to = p + step - normal * normal.dot(step);
+            // The ring's worst angle may only grow; no face may flip.
+            let mut worst = (f64::INFINITY, f64::INFINITY);
+            let mut flipped = false;
+            for &f in ring {
+                let t = mesh.triangles[f as usize];
+                let old = t.map(|w| mesh.positions[w as usize]);
+                let new = t.map(|w| {
+                    if w as usize == v {
+                        to
+                    } else {
+                        mesh.positions[w as usize]
+                    }
+                });
+                let (n0, n1) = (
+                    (old[1] - old[0]).cross(old[2] - old[0]),
+                    (new[1] - new[0]).cross(new[2] - new[0]),
+                );
+                flipped |= n0.dot(n1) <= 0.0;
+                worst.0 = worst.0.min(min_angle(old[0], old[1], old[2]));
+                worst.1 = worst.1.min(min_angle(new[0], new[1], new[2]));
+            }
+            let ok = !flipped && worst.1 >= worst.0;
+            if ok {
+                mesh.positions[v] = to;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::info::analyse;
+    use crate::mesh::shapes;
+    use crate::progress::Silent;
+
+    fn genus_closed_outward(mesh: &TriMesh) -> Vec<i64> {
+        let r = analyse(mesh.clone(), false).unwrap().report;
+        assert_eq!(r.boundary_edges, 0);
+        assert_eq!(
+            r.defects.non_manifold_edges + r.defects.non_manifold_vertices,
+            0
+        );
+        assert_eq!(r.normals, Some("outward"));
+        r.genus
+    }
+
+    #[test]
+    fn a_sphere_and_a_torus_keep_their_genus_shape_and_angles() {
+        for (mesh, genus) in [
+            (shapes::icosphere(5), 0),
+            (shapes::torus(1.0, 0.35, 96, 36), 1),
+        ] {
+            let before = mesh.signed_volume();
+            let out = decimate(&mesh, mesh.num_faces() / 8, 5, &Silent).unwrap();
+            assert!(out.num_faces() <= mesh.num_faces() / 8);
+            assert_eq!(genus_closed_outward(&out), vec![genus]);
+            let volume = out.signed_volume() / before;
+            assert!((volume - 1.0).abs() < 0.02, "volume ratio {volume}");
+            let worst = (0..out.num_faces())
+                .map(|f| {
+                    let [a, b, c] = out.corners(f);
+                    min_angle(a, b, c)
+                })
+                .fold(180.0, f64::min);
+            assert!(worst >= MIN_ANGLE, "smallest angle {worst}");
+            // Same bytes again.
+            let again = decimate(&mesh, mesh.num_faces() / 8, 5, &Silent).unwrap();
+            assert_eq!(again.positions, out.positions);
+        }
+    }
+
+    #[test]
+    fn a_budget_below_a_tetrahedron_is_refused() {
+        let mesh = shapes::icosphere(1);
+        let e = decimate(&mesh, 2, 0, &Silent).unwrap_err().to_string();
+        assert!(e.contains("above the budget of 2"), "{e}");
+    }
+}

@@ -15,7 +15,7 @@ use std::collections::BinaryHeap;
 use glam::{DMat3, DVec3};
 
 use crate::error::{Error, Result};
-use crate::mesh::TriMesh;
+use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
 /// No collapse may leave the faces it moves with an angle below this
@@ -24,7 +24,7 @@ use crate::progress::{self, Progress};
 /// faces of a 50k budget (marching tetrahedra's own faces are thinner, and
 /// the guard keeps them from being collapsed into better ones): edge flips
 /// and remeshing are the next step.
-pub const MIN_ANGLE: f64 = 12.0;
+pub const MIN_ANGLE: f64 = 20.0;
 /// Nor turn a face by more than this (degrees).
 const MAX_TURN: f64 = 60.0;
 
@@ -252,15 +252,49 @@ impl State {
 }
 
 /// Collapse edges of `mesh` (closed and manifold) until it has at most
-/// `faces` faces or no collapse is allowed; then `relax` rounds of
-/// tangential relaxation. Deterministic (one thread, ties broken by the
-/// edge). The error names why the budget was not reached.
+/// `faces` faces; then `relax` rounds of edge flips and tangential
+/// relaxation. Where the collapses get stuck above the budget (every
+/// candidate would make an angle under `MIN_ANGLE`), a round of flips and
+/// relaxation evens the faces out and the collapses go on, up to
+/// `ROUNDS` times. Deterministic (one thread, ties broken by the edge).
+/// The error names why the budget was not reached.
 pub fn decimate(
     mesh: &TriMesh,
     faces: usize,
     relax: usize,
     progress: &dyn Progress,
 ) -> Result<TriMesh> {
+    progress.stage("decimating", mesh.num_faces().saturating_sub(faces) as u64);
+    let mut out = mesh.clone();
+    for _ in 0..ROUNDS {
+        // Even out the thin faces first, so the angle guard does not hold
+        // collapses back around them.
+        flip_edges(&mut out, 3);
+        relax_tangentially(&mut out, 1);
+        out = collapse_to(&out, faces, progress)?;
+        if out.num_faces() <= faces {
+            break;
+        }
+    }
+    if out.num_faces() > faces {
+        return Err(Error::invalid(format!(
+            "decimation stopped at {} faces, above the budget of {faces}: no further \
+             collapse keeps the surface manifold with its angles at least {MIN_ANGLE} degrees",
+            out.num_faces()
+        )));
+    }
+    for _ in 0..relax {
+        flip_edges(&mut out, 1);
+        relax_tangentially(&mut out, 1);
+    }
+    Ok(out)
+}
+
+/// Rounds of collapses, each after a round of flips and relaxation.
+const ROUNDS: usize = 6;
+
+/// Collapses until `faces` or until none is allowed.
+fn collapse_to(mesh: &TriMesh, faces: usize, progress: &dyn Progress) -> Result<TriMesh> {
     let n = mesh.num_vertices();
     let mut s = State {
         positions: mesh.positions.clone(),
@@ -299,8 +333,6 @@ pub fn decimate(
     // A tetrahedron is the smallest closed surface: the link condition
     // would let it fold into a doubled triangle.
     let mut vertices = mesh.num_vertices();
-    let start = live;
-    progress.stage("decimating", start.saturating_sub(faces) as u64);
     let mut since_check = 0;
     while live > faces {
         let Some(c) = heap.pop() else { break };
@@ -327,31 +359,13 @@ pub fn decimate(
             since_check = 0;
         }
     }
-    if live > faces {
-        return Err(Error::invalid(format!(
-            "decimation stopped at {live} faces, above the budget of {faces}: no further \
-             collapse keeps the surface manifold with its angles at least {MIN_ANGLE} degrees"
-        )));
-    }
-    // Compact, vertices in order of use.
-    let mut new_id = vec![u32::MAX; n];
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for (f, t) in s.triangles.iter().enumerate() {
-        if !s.alive[f] {
-            continue;
-        }
-        triangles.push(t.map(|v| {
-            if new_id[v as usize] == u32::MAX {
-                new_id[v as usize] = positions.len() as u32;
-                positions.push(s.positions[v as usize]);
-            }
-            new_id[v as usize]
-        }));
-    }
-    let mut out = TriMesh::new(positions, triangles);
-    relax_tangentially(&mut out, relax);
-    Ok(out)
+    // The faces left, vertices in order of use.
+    let faces: Vec<FaceId> = (0..s.triangles.len())
+        .filter(|&f| s.alive[f])
+        .map(FaceId::from)
+        .collect();
+    let current = TriMesh::new(s.positions, s.triangles);
+    Ok(super::submesh::extract(&current, &faces).0)
 }
 
 /// Rounds of tangential relaxation: each vertex moves halfway to its
@@ -418,6 +432,96 @@ fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
         }
     }
 }
+
+/// Passes of edge flips: an edge between two faces that meet at no more
+/// than `MAX_CREASE` degrees is flipped when that raises the smaller of the
+/// two faces' smallest angles (Delaunay's criterion on a surface), no face
+/// turns over and the new edge is not already one. Flipping an almost flat
+/// pair moves the surface by little; it is how remeshers even out the
+/// thin faces that collapses leave. The number of flips made.
+pub fn flip_edges(mesh: &mut TriMesh, passes: usize) -> usize {
+    use std::collections::HashMap;
+    let crease = MAX_CREASE.to_radians().cos();
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut flips = 0;
+    for _ in 0..passes {
+        let mut edges: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let e = edges
+                    .entry(key(t[k], t[(k + 1) % 3]))
+                    .or_insert([u32::MAX; 2]);
+                let slot = if e[0] == u32::MAX { 0 } else { 1 };
+                e[slot] = f as u32;
+            }
+        }
+        // In a fixed order, so the result does not hang on the map's.
+        let mut order: Vec<(u32, u32)> = edges.keys().copied().collect();
+        order.sort_unstable();
+        let mut made = 0;
+        for e in order {
+            let Some(&[f0, f1]) = edges.get(&e) else {
+                continue;
+            };
+            if f1 == u32::MAX {
+                continue;
+            }
+            // f0 runs a -> b -> c, f1 runs b -> a -> d.
+            let t0 = mesh.triangles[f0 as usize];
+            let k = (0..3)
+                .find(|&k| key(t0[k], t0[(k + 1) % 3]) == e)
+                .expect("f0 holds e");
+            let (a, b, c) = (t0[k], t0[(k + 1) % 3], t0[(k + 2) % 3]);
+            let t1 = mesh.triangles[f1 as usize];
+            let Some(d) = t1.iter().copied().find(|&v| v != a && v != b) else {
+                continue;
+            };
+            if c == d || edges.contains_key(&key(c, d)) {
+                continue;
+            }
+            let p = |v: u32| mesh.positions[v as usize];
+            let normal = |x: u32, y: u32, z: u32| (p(y) - p(x)).cross(p(z) - p(x));
+            let (n0, n1) = (normal(a, b, c), normal(b, a, d));
+            if n0.length_squared() == 0.0
+                || n1.length_squared() == 0.0
+                || n0.normalize().dot(n1.normalize()) < crease
+            {
+                continue;
+            }
+            let before = min_angle(p(a), p(b), p(c)).min(min_angle(p(b), p(a), p(d)));
+            let after = min_angle(p(c), p(a), p(d)).min(min_angle(p(d), p(b), p(c)));
+            let up = n0 + n1;
+            if after <= before + 1e-9
+                || normal(c, a, d).dot(up) <= 0.0
+                || normal(d, b, c).dot(up) <= 0.0
+            {
+                continue;
+            }
+            mesh.triangles[f0 as usize] = [c, a, d];
+            mesh.triangles[f1 as usize] = [d, b, c];
+            edges.remove(&e);
+            edges.insert(key(c, d), [f0, f1]);
+            for (edge, from, to) in [(key(a, d), f1, f0), (key(b, c), f0, f1)] {
+                if let Some(pair) = edges.get_mut(&edge) {
+                    for slot in pair.iter_mut() {
+                        if *slot == from {
+                            *slot = to;
+                        }
+                    }
+                }
+            }
+            made += 1;
+        }
+        flips += made;
+        if made == 0 {
+            break;
+        }
+    }
+    flips
+}
+
+/// The largest angle (degrees) between two faces whose edge may flip.
+const MAX_CREASE: f64 = 15.0;
 
 #[cfg(test)]
 mod tests {

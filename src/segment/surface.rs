@@ -20,8 +20,8 @@ use std::collections::HashMap;
 use glam::DVec3;
 
 use crate::error::Result;
-use crate::mesh::TriMesh;
 use crate::mesh::dsu::DisjointSets;
+use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
 /// The field the surface is a level set of.
@@ -197,20 +197,9 @@ pub fn largest_component(mesh: TriMesh) -> (TriMesh, usize) {
     let keep = (0..n)
         .max_by_key(|&c| (faces[c], std::cmp::Reverse(c)))
         .unwrap_or(0) as u32;
-    let mut new_id = vec![u32::MAX; mesh.num_vertices()];
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for (t, &c) in mesh.triangles.iter().zip(&of_face) {
-        if c != keep {
-            continue;
-        }
-        triangles.push(t.map(|v| {
-            if new_id[v as usize] == u32::MAX {
-                new_id[v as usize] = positions.len() as u32;
-                positions.push(mesh.positions[v as usize]);
-            }
-            new_id[v as usize]
-        }));
-    }
-    (TriMesh::new(positions, triangles), n)
+    let faces: Vec<FaceId> = (0..mesh.num_faces())
+        .filter(|&f| of_face[f] == keep)
+        .map(FaceId::from)
+        .collect();
+    (crate::mesh::submesh::extract(&mesh, &faces).0, n)
 }

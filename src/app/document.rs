@@ -275,7 +275,7 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         // Written as a person would: arrays on one line, no path to the
         // bundled database.
-        assert!(text.contains("position = [0.0, 0.0, 5.0]"), "{text}");
+        assert!(text.contains("position = [0.0, 0.0, 4.0]"), "{text}");
         assert!(!text.contains("database"), "{text}");
         let again = Document::open(&path).unwrap();
         assert_eq!(again.spec.nodes.len(), doc.spec.nodes.len());

@@ -106,7 +106,8 @@ pub fn mesh(
 ) -> Result<(TriMesh, MeshReport)> {
     let inside = select(volume, name, opts.region)?;
     let voxels = inside.iter().filter(|&&b| b).count() as u64;
-    progress.stage("extracting the surface", volume.size[2] as u64);
+    // One step per slab of cubes, the padding's included.
+    progress.stage("extracting the surface", volume.size[2] as u64 + 1);
     let field = match opts.region {
         // A label's indicator crosses 1/2 halfway between voxel centres.
         Region::Label(_) => surface::Field::Binary(&inside),

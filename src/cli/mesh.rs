@@ -109,10 +109,7 @@ pub fn run(args: Args) -> Result<()> {
         seconds: start.elapsed().as_secs_f64(),
     };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&figures).expect("the figures serialise")
-        );
+        super::print_json(&figures);
         return Ok(());
     }
     let f = &figures;

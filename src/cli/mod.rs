@@ -138,6 +138,15 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// Group digits in threes, as the reports print counts: 56172 -> "56,172".
+/// Print figures as pretty JSON (`--json`). Plain numbers, paths and
+/// strings: serialising cannot fail.
+pub fn print_json(figures: &impl serde::Serialize) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(figures).expect("the figures serialise")
+    );
+}
+
 pub fn thousands(n: usize) -> String {
     let digits = n.to_string();
     let mut out = String::with_capacity(digits.len() + digits.len() / 3);

@@ -99,11 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         seconds,
     };
     if args.json {
-        // Plain numbers, paths and strings: serialising cannot fail.
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&figures).expect("the figures serialise")
-        );
+        super::print_json(&figures);
         return Ok(());
     }
     let f = &figures;

@@ -72,17 +72,7 @@ pub fn run(args: Args) -> Result<()> {
         (None, Some(t)) => Region::Threshold(t),
         (None, None) => return Err(Error::invalid("give --label N or --threshold T")),
     };
-    let ext = args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("obj" | "ply" | "stl")) {
-        return Err(Error::format(
-            &args.output,
-            "organtex writes meshes as .obj, .ply or .stl",
-        ));
-    }
+    organtex::mesh::io::output_format(&args.output)?;
     let start = Instant::now();
     let volume = ScalarVolume::read(&args.volume)?;
     let opts = MeshOptions {

@@ -65,19 +65,24 @@ fn check_usable(path: &Path, mesh: &TriMesh) -> Result<()> {
 /// Write `mesh` by its name's ending: .obj, .ply (binary) or .stl
 /// (binary); atomic.
 pub fn write(path: &Path, mesh: &TriMesh) -> Result<()> {
+    match output_format(path)? {
+        "obj" => obj::write(path, mesh, None),
+        "ply" => ply::write(path, mesh),
+        _ => stl::write(path, mesh),
+    }
+}
+
+/// The format `write` would give `path` ("obj", "ply" or "stl"), or the
+/// error it would: for commands that check their output before long work.
+pub fn output_format(path: &Path) -> Result<&'static str> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("obj") => obj::write(path, mesh, None),
-        Some("ply") => ply::write(path, mesh),
-        Some("stl") => stl::write(path, mesh),
-        _ => Err(Error::format(
-            path,
-            "organtex writes meshes as .obj, .ply or .stl",
-        )),
-    }
+    ["obj", "ply", "stl"]
+        .into_iter()
+        .find(|f| ext.as_deref() == Some(*f))
+        .ok_or_else(|| Error::format(path, "organtex writes meshes as .obj, .ply or .stl"))
 }
 
 /// Write `mesh` as OBJ (with its uvs), plus an .mtl mapping `texture` when

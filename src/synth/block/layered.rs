@@ -38,6 +38,8 @@ const DEPTH_WEIGHT: i64 = 60;
 const ROW_CANDIDATES: usize = 3;
 /// Smallest side of the coarsest block the default pyramid keeps.
 const COARSEST: usize = 16;
+/// Pixels of the largest neighbourhood (11 x 11).
+const MAX_WINDOW: usize = 121;
 
 #[derive(Clone, Debug)]
 pub struct LayeredOptions {
@@ -288,21 +290,26 @@ impl<'a> Layered<'a> {
         self.e.valid[i].then_some(i)
     }
 
-    /// Colour plus depth cost of exemplar pixel `c` for voxel `v` in plane
-    /// `a`; stops once past `limit`.
-    fn cost(&self, v: usize, a: usize, c: u32, window: &[(i32, i32)], limit: i64) -> i64 {
+    /// Colour plus depth cost of exemplar pixel `c` for a voxel at
+    /// `depth` whose in-plane neighbourhood is `around` (offset and colour
+    /// of each window pixel inside the block, in window order); stops once
+    /// past `limit`.
+    fn cost(
+        &self,
+        depth: usize,
+        around: &[(i32, i32, [u8; 3])],
+        window: usize,
+        c: u32,
+        limit: i64,
+    ) -> i64 {
         let w = self.e.width as i32;
         let (sx, sy) = (c as i32 % w, c as i32 / w);
-        let depth = (v / self.n % self.n) as i64;
-        let mut cost = DEPTH_WEIGHT * (sy as i64 - depth).abs() * window.len() as i64;
-        for &(du, dv) in window {
-            let Some(q) = self.neighbour(v, a, du, dv) else {
-                continue;
-            };
+        let mut cost = DEPTH_WEIGHT * (sy as i64 - depth as i64).abs() * window as i64;
+        for &(du, dv, b) in around {
             match self.usable(sx + du, sy + dv) {
                 None => cost += MAX_PIXEL_COST,
                 Some(s) => {
-                    let (p, b) = (self.e.pixels[s], self.colour[q]);
+                    let p = self.e.pixels[s];
                     cost += (0..3)
                         .map(|k| (p[k] as i64 - b[k] as i64).abs())
                         .sum::<i64>();
@@ -326,34 +333,51 @@ impl<'a> Layered<'a> {
         key: [u64; 2],
     ) -> [(u32, i64); 2] {
         let w = self.e.width as i32;
-        let mut candidates = vec![self.coord[a][v]];
-        let offer = |sx: i32, sy: i32, out: &mut Vec<u32>| {
+        // At most the current pixel, one per ring neighbour and the row's
+        // picks: on the stack, as this runs for every voxel and plane.
+        let mut candidates = [0u32; 1 + RING.len() + ROW_CANDIDATES];
+        candidates[0] = self.coord[a][v];
+        let mut count = 1;
+        let mut offer = |sx: i32, sy: i32| {
             if let Some(i) = self.usable(sx, sy)
-                && !out.contains(&(i as u32))
+                && !candidates[..count].contains(&(i as u32))
             {
-                out.push(i as u32);
+                candidates[count] = i as u32;
+                count += 1;
             }
         };
         // Coherence: each ring neighbour's pixel shifted back.
         for &(du, dv) in &RING {
             if let Some(q) = self.neighbour(v, a, du, dv) {
                 let c = self.coord[a][q] as i32;
-                offer(c % w - du, c / w - dv, &mut candidates);
+                offer(c % w - du, c / w - dv);
             }
         }
         // Random pixels of the voxel's own row (the depth channel's).
-        let row = &self.rows[v / self.n % self.n];
+        let depth = v / self.n % self.n;
+        let row = &self.rows[depth];
         for k in 0..ROW_CANDIDATES.min(row.len()) {
             let c = row[rng::below(
                 seed,
                 &[key[0], key[1], v as u64, 10 * a as u64 + k as u64],
                 row.len(),
             )] as i32;
-            offer(c % w, c / w, &mut candidates);
+            offer(c % w, c / w);
         }
+        // The voxel's neighbourhood is the same for every candidate: read
+        // it once (window pixels past the top or bottom layer cost nothing).
+        let mut around = [(0i32, 0i32, [0u8; 3]); MAX_WINDOW];
+        let mut inside = 0;
+        for &(du, dv) in window {
+            if let Some(q) = self.neighbour(v, a, du, dv) {
+                around[inside] = (du, dv, self.colour[q]);
+                inside += 1;
+            }
+        }
+        let around = &around[..inside];
         let mut best = [(candidates[0], i64::MAX); 2];
-        for &c in &candidates {
-            let cost = self.cost(v, a, c, window, best[1].1);
+        for &c in &candidates[..count] {
+            let cost = self.cost(depth, around, window.len(), c, best[1].1);
             if cost < best[0].1 {
                 best = [(c, cost), best[0]];
             } else if cost < best[1].1 {
@@ -392,6 +416,14 @@ impl<'a> Layered<'a> {
         // depth row than in the exemplar's (histogram matching, per depth
         // row: the layers differ in colour).
         let excess = self.row_excess();
+        // The damping of exemplar pixel s at depth row y, (1 + excess)^p,
+        // tabled once: each voxel reads it for every window pixel of both
+        // planes, and the exemplar has fewer pixels than the block voxels.
+        let texels = self.e.pixels.len();
+        let damping: Vec<f32> = (0..self.n * texels)
+            .into_par_iter()
+            .map(|i| (1.0 + excess(i / texels, self.e.pixels[i % texels])).powi(HIST_POWER))
+            .collect();
         let pixels = window.len() as f32;
         let weight: [Vec<f32>; 2] =
             cost.map(|c| c.iter().map(|&d| (d / pixels + 1.0).powf(-1.2)).collect());
@@ -410,8 +442,7 @@ impl<'a> Layered<'a> {
                             continue;
                         };
                         let p = self.e.pixels[s];
-                        let wt =
-                            weight[u] / (1.0 + excess(v / self.n % self.n, p)).powi(HIST_POWER);
+                        let wt = weight[u] / damping[v / self.n % self.n * texels + s];
                         for k in 0..3 {
                             acc[k] += wt * p[k] as f32;
                         }

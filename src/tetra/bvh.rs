@@ -264,6 +264,13 @@ impl Bvh {
         out.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
     }
 
+    /// The box of every triangle (a point at the origin for none).
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.nodes
+            .first()
+            .map_or((DVec3::ZERO, DVec3::ZERO), |root| (root.lo, root.hi))
+    }
+
     /// Distance from `q` to the closest triangle (infinite for no triangle).
     pub fn distance(&self, q: DVec3) -> f64 {
         self.distance_below(q, f64::INFINITY)

@@ -12,6 +12,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use super::bvh::Bvh;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
@@ -480,6 +482,12 @@ fn one_sided(from: &TriMesh, to: &Bvh, step: f64) -> (f64, f64) {
     }
     let max_steps = ((2.0 * SAMPLES / from.triangles.len() as f64).sqrt() as usize).max(4);
     let at_vertex: Vec<f64> = from.positions.par_iter().map(|&p| to.distance(p)).collect();
+    // The largest distance found so far by any triangle: a sample whose
+    // bound from the corners cannot pass it needs no query. Non-negative
+    // floats order as their bits do. The result is the largest sampled
+    // distance whichever thread finds what first (a skipped sample could
+    // not have raised it).
+    let largest = AtomicU64::new(at_vertex.iter().copied().fold(0.0, f64::max).to_bits());
     from.triangles
         .par_iter()
         .map(|t| {
@@ -510,9 +518,14 @@ fn one_sided(from: &TriMesh, to: &Bvh, step: f64) -> (f64, f64) {
                     let upper = (0..3)
                         .map(|m| d[m] + q.distance(p[m]))
                         .fold(f64::INFINITY, f64::min);
-                    // Only a sample farther than `best` raises it.
-                    if upper > best {
-                        best = best.max(to.distance_between(q, best, upper));
+                    // Only a sample farther than the largest so far raises it.
+                    let known = f64::from_bits(largest.load(Ordering::Relaxed)).max(best);
+                    if upper > known {
+                        let d = to.distance_between(q, known, upper);
+                        if d > known {
+                            best = d;
+                            largest.fetch_max(d.to_bits(), Ordering::Relaxed);
+                        }
                     }
                 }
             }

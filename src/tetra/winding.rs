@@ -30,6 +30,11 @@ pub const BETA: f64 = 2.0;
 #[derive(Clone, Debug)]
 pub struct Winding {
     pub(crate) bvh: Bvh,
+    /// Whether every edge is crossed as often one way as the other (a
+    /// closed surface, self-intersecting or not): then the winding number
+    /// is an integer off the surface, the same all over any ball the
+    /// surface does not enter (`Winding::closed`).
+    closed: bool,
 }
 
 impl Winding {
@@ -38,7 +43,15 @@ impl Winding {
         let tris = (0..mesh.num_faces()).map(|f| mesh.corners(f)).collect();
         Winding {
             bvh: Bvh::new(tris),
+            closed: balanced_edges(mesh),
         }
+    }
+
+    /// Whether the surface is closed (see the field): a point farther from
+    /// every triangle than from a point whose winding number is known has
+    /// the same one, which spares most queries away from the surface.
+    pub fn closed(&self) -> bool {
+        self.closed
     }
 
     /// The winding number at `q` with the far-field approximation.
@@ -82,6 +95,27 @@ impl Winding {
     pub fn inside(&self, q: DVec3) -> bool {
         self.at(q) > 0.5
     }
+}
+
+/// Whether each undirected edge of `mesh` is used by as many faces in one
+/// direction as in the other: the faces then form a cycle with no boundary,
+/// whose winding number is an integer everywhere off it.
+fn balanced_edges(mesh: &TriMesh) -> bool {
+    // Sorted keys rather than a hash map: one pass, no hashing of 3F edges.
+    let mut edges: Vec<(u64, i32)> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| {
+            let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
+            (key, if a < b { 1 } else { -1 })
+        })
+        .collect();
+    edges.sort_unstable_by_key(|e| e.0);
+    edges
+        .chunk_by(|x, y| x.0 == y.0)
+        .all(|run| run.iter().map(|e| e.1).sum::<i32>() == 0)
 }
 
 /// A node's solid angle seen from `q`, `r = center - q`: the expansion of

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
-use crate::progress::{Progress, Span, check, timed};
+use crate::progress::{CancelOnly, Progress, Span, check, timed};
 use crate::scene::atlas::{self, Atlas};
 use crate::scene::build::{BakedScene, FacetReport, build_scene};
 use crate::scene::contrast::{Colours, Contrast, contrast};
@@ -150,64 +150,51 @@ pub fn bake(
     let baked = build_scene(&spec, opts.atlas.is_some(), progress)?;
     let build_s = start.elapsed().as_secs_f64();
 
+    // The interiors (block, tets, LST) need nothing of the surface's
+    // outputs (contrast, .glb, preview) nor these of them: the two run side
+    // by side, the LST leaving a core idle between its batches. The
+    // interiors show their progress; the outputs' stay quiet beside them.
     let mut stages = baked.spans.clone();
     let t = Instant::now();
-    let interiors = interior::interiors(&baked, out, progress, &mut stages)?;
-    let interior_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let blended = match opts.atlas {
-        Some(size) => Some(timed(&mut stages, "atlases", "", || {
-            atlases(&baked, size, progress)
-        })?),
-        None => None,
-    };
-    let figures: Vec<(Contrast, Contrast)> =
-        timed(&mut stages, "contrast", "", || match &blended {
-            Some((b, u)) => baked
-                .nodes
-                .iter()
-                .zip(b.iter().zip(u))
-                .map(|(node, (b, u))| {
-                    (
-                        contrast(node, Colours::Atlases(b)),
-                        contrast(node, Colours::Atlases(u)),
-                    )
-                })
-                .collect(),
-            // Blended and unblended side by side: a scene of one node gets
-            // both cores too.
-            None => baked
-                .nodes
-                .par_iter()
-                .map(|node| {
-                    rayon::join(
-                        || contrast(node, Colours::Layers(&node.compositor)),
-                        || contrast(node, Colours::Layers(&node.unblended)),
-                    )
-                })
-                .collect(),
-        });
-    let contrast_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    progress.stage("writing", 2);
-    let glb = timed(&mut stages, "glb", "", || {
-        let list = DrawList::of(&baked, blended.as_ref().map(|(b, _)| b.as_slice()));
-        gltf::encode(&list, &spec.name, &spec.cameras).map(|glb| (list, glb))
+    let has_interiors = spec.nodes.iter().any(|n| n.interior.is_some());
+    let quiet = CancelOnly(progress);
+    let surface_progress: &dyn Progress = if has_interiors { &quiet } else { progress };
+    let (mut interior_spans, mut surface_spans) = (Vec::new(), Vec::new());
+    let (interiors, surface) = rayon::join(
+        || {
+            let t = Instant::now();
+            let interiors = interior::interiors(&baked, out, progress, &mut interior_spans);
+            (interiors, t.elapsed().as_secs_f64())
+        },
+        || surface_outputs(&baked, opts, surface_progress, &mut surface_spans),
+    );
+    let (interiors, interior_s) = (interiors.0?, interiors.1);
+    let Surface {
+        blended,
+        figures,
+        glb,
+        picture,
+        preview_renderer,
+        preview_error,
+        contrast_s,
+        output_s,
+    } = surface?;
+    stages.push(Span {
+        stage: "interior beside the outputs".into(),
+        item: String::new(),
+        seconds: t.elapsed().as_secs_f64(),
+        parallel: false,
     });
-    let (list, glb) = glb?;
-    progress.advance(1);
-    // The preview goes through the viewer's renderer. A machine with no
-    // GPU adapter, or one that cannot draw it (a limit, memory, a driver
-    // error), gets the bake without it, and the report says why.
-    let [w, h] = opts.preview;
-    let (picture, preview_renderer, preview_error) = timed(&mut stages, "preview", "", || {
-        draw_preview(&baked, &list, [w, h])
-    });
-    progress.advance(1);
+    stages.extend(
+        interior_spans
+            .into_iter()
+            .chain(surface_spans)
+            .map(|s| Span {
+                parallel: true,
+                ..s
+            }),
+    );
     check(progress)?;
-    let output_s = t.elapsed().as_secs_f64();
 
     let mut facets = Vec::new();
     let mut borders = Vec::new();
@@ -343,4 +330,84 @@ fn draw_preview(
 ) -> (Option<image::RgbImage>, String, Option<String>) {
     let why = "organtex was built without its renderer (feature `render`)";
     (None, "none".into(), Some(why.into()))
+}
+
+/// What the surface's outputs made (`bake`, beside the interiors).
+struct Surface {
+    blended: Option<(NodeAtlases, NodeAtlases)>,
+    figures: Vec<(Contrast, Contrast)>,
+    glb: Vec<u8>,
+    picture: Option<image::RgbImage>,
+    preview_renderer: String,
+    preview_error: Option<String>,
+    contrast_s: f64,
+    output_s: f64,
+}
+
+/// The atlases where asked, the seams' and borders' contrast, the .glb and
+/// the preview, each step's time onto `stages`.
+fn surface_outputs(
+    baked: &BakedScene,
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+    stages: &mut Vec<Span>,
+) -> Result<Surface> {
+    let t = Instant::now();
+    let blended = match opts.atlas {
+        Some(size) => Some(timed(stages, "atlases", "", || {
+            atlases(baked, size, progress)
+        })?),
+        None => None,
+    };
+    let figures: Vec<(Contrast, Contrast)> = timed(stages, "contrast", "", || match &blended {
+        Some((b, u)) => baked
+            .nodes
+            .iter()
+            .zip(b.iter().zip(u))
+            .map(|(node, (b, u))| {
+                (
+                    contrast(node, Colours::Atlases(b)),
+                    contrast(node, Colours::Atlases(u)),
+                )
+            })
+            .collect(),
+        // Blended and unblended side by side: a scene of one node gets
+        // both cores too.
+        None => baked
+            .nodes
+            .par_iter()
+            .map(|node| {
+                rayon::join(
+                    || contrast(node, Colours::Layers(&node.compositor)),
+                    || contrast(node, Colours::Layers(&node.unblended)),
+                )
+            })
+            .collect(),
+    });
+    let contrast_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    progress.stage("writing", 2);
+    let (list, glb) = timed(stages, "glb", "", || {
+        let list = DrawList::of(baked, blended.as_ref().map(|(b, _)| b.as_slice()));
+        gltf::encode(&list, &baked.spec.name, &baked.spec.cameras).map(|glb| (list, glb))
+    })?;
+    progress.advance(1);
+    // The preview goes through the viewer's renderer. A machine with no
+    // GPU adapter, or one that cannot draw it (a limit, memory, a driver
+    // error), gets the bake without it, and the report says why.
+    let (picture, preview_renderer, preview_error) = timed(stages, "preview", "", || {
+        draw_preview(baked, &list, opts.preview)
+    });
+    progress.advance(1);
+    Ok(Surface {
+        blended,
+        figures,
+        glb,
+        picture,
+        preview_renderer,
+        preview_error,
+        contrast_s,
+        output_s: t.elapsed().as_secs_f64(),
+    })
 }

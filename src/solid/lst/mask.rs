@@ -208,8 +208,16 @@ fn mask_alpha(kind: MaskKind, w: [f64; 3], radius: impl Fn([f64; 3]) -> f64) -> 
             fall((r - (edge - FALLOFF)) / FALLOFF)
         }
         band => {
+            // The depth factor first: past the band it is 0 without the
+            // lateral edge's look-up.
+            let s = w[1];
+            let depth = match band {
+                MaskKind::Outer => fall((s - BAND_OUTER) / FALLOFF),
+                MaskKind::Inner => fall((BAND_INNER - s) / FALLOFF),
+                _ => fall((s - BAND_MIDDLE.1) / FALLOFF).min(fall((BAND_MIDDLE.0 - s) / FALLOFF)),
+            };
             let r = (c[0] * c[0] + c[2] * c[2]).sqrt();
-            if r >= most {
+            if depth == 0.0 || r >= most {
                 return 0.0;
             }
             let lateral = if r <= least {
@@ -217,12 +225,6 @@ fn mask_alpha(kind: MaskKind, w: [f64; 3], radius: impl Fn([f64; 3]) -> f64) -> 
             } else {
                 let edge = radius([c[0] / r, 0.0, c[2] / r]);
                 fall((r - (edge - FALLOFF)) / FALLOFF)
-            };
-            let s = w[1];
-            let depth = match band {
-                MaskKind::Outer => fall((s - BAND_OUTER) / FALLOFF),
-                MaskKind::Inner => fall((BAND_INNER - s) / FALLOFF),
-                _ => fall((s - BAND_MIDDLE.1) / FALLOFF).min(fall((BAND_MIDDLE.0 - s) / FALLOFF)),
             };
             lateral * depth
         }

@@ -265,18 +265,23 @@ impl<'a> Layered<'a> {
         Layered::with_coords(e, n, coord, Self::rows(e))
     }
 
-    /// The voxel at in-plane offset (du, dv) from voxel `v` in plane `a`:
-    /// wrapped along u, `None` past the top or bottom layer.
+    /// The voxel at in-plane offset (du, dv) from the voxel at `p` in
+    /// plane `a`: wrapped along u, `None` past the top or bottom layer.
     #[inline]
-    fn neighbour(&self, v: usize, a: usize, du: i32, dv: i32) -> Option<usize> {
+    fn neighbour_of(&self, mut p: [i32; 3], a: usize, du: i32, dv: i32) -> Option<usize> {
         let n = self.n as i32;
-        let mut p = xyz(self.n, v).map(|c| c as i32);
         p[1] += dv;
         if !(0..n).contains(&p[1]) {
             return None;
         }
         let u = U_AXIS[a];
-        p[u] = (p[u] + du).rem_euclid(n);
+        p[u] += du;
+        // |du| <= the window's radius < n: one wrap at most.
+        if p[u] < 0 {
+            p[u] += n;
+        } else if p[u] >= n {
+            p[u] -= n;
+        }
         Some(((p[2] * n + p[1]) * n + p[0]) as usize)
     }
 
@@ -300,26 +305,54 @@ impl<'a> Layered<'a> {
         around: &[(i32, i32, [u8; 3])],
         window: usize,
         c: u32,
+        whole: bool,
         limit: i64,
     ) -> i64 {
         let w = self.e.width as i32;
         let (sx, sy) = (c as i32 % w, c as i32 / w);
         let mut cost = DEPTH_WEIGHT * (sy as i64 - depth as i64).abs() * window as i64;
+        let sad = |p: [u8; 3], b: [u8; 3]| {
+            (0..3)
+                .map(|k| (p[k] as i64 - b[k] as i64).abs())
+                .sum::<i64>()
+        };
+        if whole {
+            // Every window pixel about `c` is inside and usable: no checks.
+            for &(du, dv, b) in around {
+                cost += sad(self.e.pixels[(c as i32 + dv * w + du) as usize], b);
+                if cost >= limit {
+                    break;
+                }
+            }
+            return cost;
+        }
         for &(du, dv, b) in around {
             match self.usable(sx + du, sy + dv) {
                 None => cost += MAX_PIXEL_COST,
-                Some(s) => {
-                    let p = self.e.pixels[s];
-                    cost += (0..3)
-                        .map(|k| (p[k] as i64 - b[k] as i64).abs())
-                        .sum::<i64>();
-                }
+                Some(s) => cost += sad(self.e.pixels[s], b),
             }
             if cost >= limit {
                 break;
             }
         }
         cost
+    }
+
+    /// Per exemplar pixel, whether the window of radius `r` about it lies
+    /// inside the exemplar and every pixel of it is usable.
+    fn whole_windows(&self, r: i32) -> Vec<bool> {
+        let (w, h) = (self.e.width as i32, self.e.height as i32);
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                x >= r
+                    && y >= r
+                    && x + r < w
+                    && y + r < h
+                    && (-r..=r)
+                        .all(|dv| (-r..=r).all(|du| self.e.valid[(i + dv * w + du) as usize]))
+            })
+            .collect()
     }
 
     /// Search for voxel `v` in plane `a`: the best and second best
@@ -329,10 +362,12 @@ impl<'a> Layered<'a> {
         v: usize,
         a: usize,
         window: &[(i32, i32)],
+        whole: &[bool],
         seed: u64,
         key: [u64; 2],
     ) -> [(u32, i64); 2] {
         let w = self.e.width as i32;
+        let at = xyz(self.n, v).map(|c| c as i32);
         // At most the current pixel, one per ring neighbour and the row's
         // picks: on the stack, as this runs for every voxel and plane.
         let mut candidates = [0u32; 1 + RING.len() + ROW_CANDIDATES];
@@ -348,7 +383,7 @@ impl<'a> Layered<'a> {
         };
         // Coherence: each ring neighbour's pixel shifted back.
         for &(du, dv) in &RING {
-            if let Some(q) = self.neighbour(v, a, du, dv) {
+            if let Some(q) = self.neighbour_of(at, a, du, dv) {
                 let c = self.coord[a][q] as i32;
                 offer(c % w - du, c / w - dv);
             }
@@ -369,7 +404,7 @@ impl<'a> Layered<'a> {
         let mut around = [(0i32, 0i32, [0u8; 3]); MAX_WINDOW];
         let mut inside = 0;
         for &(du, dv) in window {
-            if let Some(q) = self.neighbour(v, a, du, dv) {
+            if let Some(q) = self.neighbour_of(at, a, du, dv) {
                 around[inside] = (du, dv, self.colour[q]);
                 inside += 1;
             }
@@ -377,7 +412,7 @@ impl<'a> Layered<'a> {
         let around = &around[..inside];
         let mut best = [(candidates[0], i64::MAX); 2];
         for &c in &candidates[..count] {
-            let cost = self.cost(depth, around, window.len(), c, best[1].1);
+            let cost = self.cost(depth, around, window.len(), c, whole[c as usize], best[1].1);
             if cost < best[0].1 {
                 best = [(c, cost), best[0]];
             } else if cost < best[1].1 {
@@ -390,9 +425,10 @@ impl<'a> Layered<'a> {
     /// One round: search both planes, apply the sweep fix, blend.
     fn round(&mut self, opts: &LayeredOptions, key: [u64; 2]) {
         let window = window((opts.neighbourhood / 2) as i32);
+        let whole = self.whole_windows((opts.neighbourhood / 2) as i32);
         let found: Vec<[[(u32, i64); 2]; 2]> = (0..self.n * self.n * self.n)
             .into_par_iter()
-            .map(|v| [0, 1].map(|a| self.search(v, a, &window, opts.seed, key)))
+            .map(|v| [0, 1].map(|a| self.search(v, a, &window, &whole, opts.seed, key)))
             .collect();
         let mut cost = [vec![0f32; found.len()], vec![0f32; found.len()]];
         for (v, [p0, p1]) in found.iter().enumerate() {
@@ -432,9 +468,10 @@ impl<'a> Layered<'a> {
             .map(|v| {
                 let (mut acc, mut total) = ([0f32; 3], 0f32);
                 let w = self.e.width as i32;
+                let at = xyz(self.n, v).map(|c| c as i32);
                 for (a, (coord, weight)) in self.coord.iter().zip(&weight).enumerate() {
                     for &(du, dv) in &window {
-                        let Some(u) = self.neighbour(v, a, du, dv) else {
+                        let Some(u) = self.neighbour_of(at, a, du, dv) else {
                             continue;
                         };
                         let c = coord[u] as i32;

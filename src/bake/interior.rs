@@ -83,19 +83,11 @@ pub(super) fn interiors(
         let quiet = CancelOnly(progress);
         let block_progress: &dyn Progress = if has_tets { &quiet } else { progress };
         let (mut block_spans, mut tet_spans) = (Vec::new(), Vec::new());
-        let (volume, tets_lst) = rayon::join(
-            || {
-                timed(&mut block_spans, "interior block", name, || {
-                    interior_block(
-                        texture,
-                        &interior.photographs,
-                        n,
-                        interior.method,
-                        k as u64,
-                        block_progress,
-                    )
-                })
-            },
+        // The tets and the LST through them are the longer chain: they
+        // start at once on this thread, the block on whichever is free
+        // (rayon runs a join's first closure here and leaves the second to
+        // be taken; the block first had the tets wait for it).
+        let (tets_lst, volume) = rayon::join(
             || -> Result<_> {
                 let tets = if has_tets {
                     Some(timed(&mut tet_spans, "tet mesh", name, || {
@@ -122,6 +114,18 @@ pub(super) fn interiors(
                     _ => None,
                 };
                 Ok((tets, lst))
+            },
+            || {
+                timed(&mut block_spans, "interior block", name, || {
+                    interior_block(
+                        texture,
+                        &interior.photographs,
+                        n,
+                        interior.method,
+                        k as u64,
+                        block_progress,
+                    )
+                })
             },
         );
         spans.push(Span {

@@ -335,3 +335,187 @@ fn bad_segmentations_are_refused_naming_the_file() {
         assert!(!out.exists(), "{name}: wrote {}", out.display());
     }
 }
+
+/// A 3D Slicer segmentation as Slicer writes one: LPS space, a turned
+/// and anisotropic direction matrix, two overlapping segments in two
+/// layers along a first `list` axis, gzip. Layer 0: the MNI white matter
+/// (>= 0.5) in a crop of the real map; layer 1: a ball across it.
+/// Returns the file, the layers' values and the voxel-to-RAS map the
+/// header means (LPS with x and y negated, written out by hand here).
+fn slicer_segmentation(dir: &Path) -> (PathBuf, [Vec<f32>; 2], [usize; 3], DAffine3) {
+    let wm =
+        ScalarVolume::read(&volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz")).unwrap();
+    let (origin, size) = ([70, 90, 70], [44usize, 40, 36]);
+    let mut white = Vec::new();
+    let mut ball = Vec::new();
+    for z in 0..size[2] {
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let v = wm.values[wm.index(origin[0] + x, origin[1] + y, origin[2] + z)];
+                white.push(if v >= 127.5 { 1.0 } else { 0.0 });
+                let p = DVec3::new(x as f64 - 20.0, y as f64 - 18.0, z as f64 - 15.0);
+                ball.push(if p.length() <= 9.0 { 4.0 } else { 0.0 });
+            }
+        }
+    }
+    // LPS columns: 30 degrees about the axial axis, spacings 0.9, 1.1, 1.3.
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let lps = DMat3::from_cols(
+        DVec3::new(c, s, 0.0) * 0.9,
+        DVec3::new(-s, c, 0.0) * 1.1,
+        DVec3::new(0.0, 0.0, 1.3),
+    );
+    let lps_origin = DVec3::new(12.5, -40.0, 33.0);
+    let axis = |v: DVec3| format!("({},{},{})", v.x, v.y, v.z);
+    let header = format!(
+        "NRRD0004\n# Complete NRRD file format specification at:\n\
+         # http://teem.sourceforge.net/nrrd/format.html\n\
+         type: short\ndimension: 4\nspace: left-posterior-superior\n\
+         sizes: 2 {} {} {}\nspace directions: none {} {} {}\n\
+         kinds: list domain domain domain\nencoding: gzip\nendian: little\n\
+         space origin: {}\nSegment0_Color:=0.9 0.9 0.8\nSegment0_ID:=Segment_1\n\
+         Segment0_LabelValue:=1\nSegment0_Layer:=0\nSegment0_Name:=white matter\n\
+         Segment1_ID:=Segment_2\nSegment1_LabelValue:=4\nSegment1_Layer:=1\n\
+         Segment1_Name:=lesion\nSegmentation_MasterRepresentation:=Binary labelmap\n\n",
+        size[0],
+        size[1],
+        size[2],
+        axis(lps.x_axis),
+        axis(lps.y_axis),
+        axis(lps.z_axis),
+        axis(lps_origin)
+    );
+    let mut raw = Vec::new();
+    for k in 0..white.len() {
+        for layer in [&white, &ball] {
+            raw.extend_from_slice(&(layer[k] as i16).to_le_bytes());
+        }
+    }
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(&raw).unwrap();
+    let mut bytes = header.into_bytes();
+    bytes.extend(gz.finish().unwrap());
+    let path = dir.join("brain.seg.nrrd");
+    std::fs::write(&path, bytes).unwrap();
+    let flip = DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0));
+    let ras = DAffine3::from_mat3_translation(flip * lps, flip * lps_origin);
+    (path, [white, ball], size, ras)
+}
+
+#[test]
+fn a_slicer_segmentation_meshes_each_segment_by_name_in_ras_millimetres() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, layers, size, ras) = slicer_segmentation(dir.path());
+    // Each segment: its layer, its label value, the header's map in RAS.
+    for (name, layer, label) in [("white matter", 0, 1), ("lesion", 1, 4)] {
+        let (volume, region) =
+            segment::open(&path, &segment::Choice::Segment(name.into())).unwrap();
+        assert_eq!(region, Region::Label(label));
+        assert_eq!(volume.size, size);
+        assert_eq!(volume.values, layers[layer]);
+        let m = volume.to_world;
+        for (a, b) in [
+            (m.matrix3.x_axis, ras.matrix3.x_axis),
+            (m.matrix3.y_axis, ras.matrix3.y_axis),
+            (m.matrix3.z_axis, ras.matrix3.z_axis),
+            (m.translation, ras.translation),
+        ] {
+            assert!(a.abs_diff_eq(b, 1e-12), "{name}: {a} vs {b}");
+        }
+    }
+    // Through the CLI, by name (any case): the white matter of the real
+    // map (its crop in pieces, all kept) closed, manifold, outward and of
+    // its voxels' volume.
+    let out = dir.path().join("wm.obj");
+    let (ok, stdout, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--segment",
+        "White Matter",
+        "--all-components",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(figures["closed"], true, "{stdout}");
+    assert_eq!(figures["manifold"], true, "{stdout}");
+    let ratio = figures["volume"].as_f64().unwrap() / figures["voxel_volume"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() <= 0.02, "{stdout}");
+    check_surface(
+        &organtex::mesh::io::read(&out).unwrap(),
+        "white matter crop",
+    );
+    // The lesion (one piece, in its own layer): taken back through the
+    // map, its surface spans its voxels within half a voxel (the
+    // smoothing moves it that little).
+    let out = dir.path().join("lesion.stl");
+    let (ok, _, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--segment",
+        "lesion",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let mesh = organtex::mesh::io::read(&out).unwrap();
+    check_surface(&mesh, "lesion");
+    let back = ras.inverse();
+    let (mut vlo, mut vhi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for p in &mesh.positions {
+        let q = back.transform_point3(*p);
+        vlo = vlo.min(q);
+        vhi = vhi.max(q);
+    }
+    let (mut ilo, mut ihi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for z in 0..size[2] {
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                if layers[1][(z * size[1] + y) * size[0] + x] == 4.0 {
+                    let c = DVec3::new(x as f64, y as f64, z as f64);
+                    ilo = ilo.min(c);
+                    ihi = ihi.max(c);
+                }
+            }
+        }
+    }
+    assert!(
+        (vlo - (ilo - 0.5)).abs().max_element() <= 0.5
+            && (vhi - (ihi + 0.5)).abs().max_element() <= 0.5,
+        "surface spans {vlo}..{vhi} in voxels, the segment {ilo}..{ihi}"
+    );
+    // A name not there: refused, the names there listed, nothing written.
+    let missing = dir.path().join("missing.obj");
+    let (ok, _, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--segment",
+        "liver",
+        "-o",
+        missing.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("brain.seg.nrrd")
+            && stderr.contains("no segment 'liver'")
+            && stderr.contains("'white matter', 'lesion'"),
+        "{stderr}"
+    );
+    assert!(!missing.exists());
+    // A label of a two-layer file: which layer is ambiguous.
+    let (ok, _, stderr) = organtex(&[
+        "mesh",
+        path.to_str().unwrap(),
+        "--label",
+        "1",
+        "-o",
+        missing.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("2 layers") && stderr.contains("--segment"),
+        "{stderr}"
+    );
+}

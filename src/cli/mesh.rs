@@ -1,32 +1,34 @@
-//! `organtex mesh VOLUME (--label N | --threshold T) -o OUT.obj|.ply|.stl
+//! `organtex mesh VOLUME (--label N | --segment NAME | --threshold T) -o OUT.obj|.ply|.stl
 //! [--smooth K] [--all-components] [--json]`: one region of a CT or MRI
 //! segmentation as a closed, manifold surface in the scanner's millimetres.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use organtex::segment::{self, MeshOptions, Region, ScalarVolume};
-use organtex::{Error, Result};
+use organtex::Result;
+use organtex::segment::{self, Choice, MeshOptions};
 use serde::Serialize;
 
 use super::progress::Bars;
 
 #[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("region").required(true).args(["label", "segment", "threshold"])))]
 pub struct Args {
     /// The segmentation: a NIfTI-1 label map or probability map (.nii,
-    /// .nii.gz), placed in the world by its sform (else qform).
+    /// .nii.gz; placed by its sform, else qform) or a NRRD label map (.nrrd,
+    /// .nhdr, 3D Slicer's .seg.nrrd; placed by its space directions and
+    /// origin). Either lands in RAS millimetres, as 3D Slicer shows them.
     volume: PathBuf,
     /// The surface: .obj, .ply or .stl (binary), in world millimetres.
     #[arg(short, long)]
     output: PathBuf,
     /// The region is the voxels of this label (a label map).
-    #[arg(
-        long,
-        conflicts_with = "threshold",
-        required_unless_present = "threshold",
-        allow_negative_numbers = true
-    )]
+    #[arg(long, allow_negative_numbers = true)]
     label: Option<i64>,
+    /// The region is this segment of a 3D Slicer segmentation (.seg.nrrd),
+    /// by name (its layer and label value come from the file).
+    #[arg(long, value_name = "NAME")]
+    segment: Option<String>,
     /// The region is the voxels at or above this value (a probability map
     /// at 0.5, or a grey volume), its surface interpolated between voxels.
     #[arg(long, allow_negative_numbers = true)]
@@ -67,14 +69,16 @@ struct Figures {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let region = match (args.label, args.threshold) {
-        (Some(l), _) => Region::Label(l),
-        (None, Some(t)) => Region::Threshold(t),
-        (None, None) => return Err(Error::invalid("give --label N or --threshold T")),
+    // clap requires one of the three.
+    let choice = match (args.label, args.segment.clone(), args.threshold) {
+        (Some(l), _, _) => Choice::Label(l),
+        (_, Some(name), _) => Choice::Segment(name),
+        (_, _, Some(t)) => Choice::Threshold(t),
+        _ => unreachable!("clap requires --label, --segment or --threshold"),
     };
     organtex::mesh::io::output_format(&args.output)?;
     let start = Instant::now();
-    let volume = ScalarVolume::read(&args.volume)?;
+    let (volume, region) = segment::open(&args.volume, &choice)?;
     let opts = MeshOptions {
         region,
         smooth: args.smooth as usize,

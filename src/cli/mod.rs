@@ -82,8 +82,9 @@ enum Command {
     /// status 1) and writes nothing.
     Section(section::Args),
     /// One region of a CT or MRI segmentation (a NIfTI label map or
-    /// probability map) as a closed, manifold, smoothed surface in the
-    /// scanner's millimetres; writes .obj, .ply or .stl.
+    /// probability map, a NRRD label map or a 3D Slicer .seg.nrrd) as a
+    /// closed, manifold, smoothed surface in the scanner's millimetres;
+    /// writes .obj, .ply or .stl.
     Mesh(mesh::Args),
     /// Fill a closed (or nearly closed) mesh with tetrahedra by isosurface
     /// stuffing: every dihedral angle in [10.7, 164.8] degrees, inside

@@ -4,12 +4,15 @@
 //!
 //! - `nifti`: NIfTI-1 volumes (`.nii`, `.nii.gz`) and their voxel-to-world
 //!   map;
+//! - `nrrd`: NRRD label maps and 3D Slicer's segmentations (`.seg.nrrd`),
+//!   their segments' names;
 //! - `surface`: the region's boundary by marching tetrahedra, which never
 //!   makes a non-manifold vertex;
 //! - `smooth`: Taubin's lambda/mu smoothing, which takes the voxel
 //!   staircase away without shrinking the organ.
 
 pub mod nifti;
+pub mod nrrd;
 pub mod smooth;
 pub mod surface;
 
@@ -40,18 +43,108 @@ impl ScalarVolume {
         self.to_world.matrix3.determinant().abs()
     }
 
-    /// Read a volume, by its name's ending: `.nii` or `.nii.gz`.
+    /// Read a volume, by its name's ending: `.nii`, `.nii.gz`, `.nrrd` or
+    /// `.nhdr` (one layer).
     pub fn read(path: &Path) -> Result<ScalarVolume> {
-        let name = path.to_string_lossy().to_ascii_lowercase();
-        if name.ends_with(".nii") || name.ends_with(".nii.gz") {
-            nifti::read(path)
-        } else {
-            Err(Error::format(
+        let mut map = read_label_map(path)?;
+        if map.layers.len() > 1 {
+            return Err(Error::format(
                 path,
-                "organtex reads segmentations from NIfTI-1 files (.nii, .nii.gz)",
+                format!(
+                    "holds {} layers (a Slicer segmentation whose segments overlap): name one \
+                     with --segment ({})",
+                    map.layers.len(),
+                    segment_names(&map.segments)
+                ),
+            ));
+        }
+        Ok(map.layers.remove(0))
+    }
+}
+
+/// A NIfTI volume (one layer, no segment names) or a NRRD label map.
+pub fn read_label_map(path: &Path) -> Result<nrrd::LabelMap> {
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+        Ok(nrrd::LabelMap {
+            layers: vec![nifti::read(path)?],
+            segments: Vec::new(),
+        })
+    } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+        nrrd::read(path)
+    } else {
+        Err(Error::format(
+            path,
+            "organtex reads segmentations from NIfTI-1 (.nii, .nii.gz) and NRRD (.nrrd, \
+             .seg.nrrd, .nhdr) files",
+        ))
+    }
+}
+
+/// What to mesh, as a user names it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Choice {
+    Label(i64),
+    /// A segment of a Slicer segmentation, by name.
+    Segment(String),
+    Threshold(f64),
+}
+
+/// The volume and region `choice` names in the file at `path`: a segment
+/// is its layer and label value. Errors name the file and list the
+/// segments there are.
+pub fn open(path: &Path, choice: &Choice) -> Result<(ScalarVolume, Region)> {
+    match choice {
+        Choice::Label(l) => Ok((ScalarVolume::read(path)?, Region::Label(*l))),
+        Choice::Threshold(t) => Ok((ScalarVolume::read(path)?, Region::Threshold(*t))),
+        Choice::Segment(name) => {
+            let mut map = read_label_map(path)?;
+            if map.segments.is_empty() {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "names no segments (segment names come from 3D Slicer's .seg.nrrd): \
+                         give the label of '{name}' instead"
+                    ),
+                ));
+            }
+            let found = map
+                .segments
+                .iter()
+                .find(|s| s.name == *name)
+                .or_else(|| {
+                    map.segments
+                        .iter()
+                        .find(|s| s.name.eq_ignore_ascii_case(name))
+                })
+                .cloned()
+                .ok_or_else(|| {
+                    Error::format(
+                        path,
+                        format!(
+                            "has no segment '{name}' (its segments: {})",
+                            segment_names(&map.segments)
+                        ),
+                    )
+                })?;
+            Ok((
+                map.layers.swap_remove(found.layer),
+                Region::Label(found.label),
             ))
         }
     }
+}
+
+/// The segments' names, quoted, for messages.
+fn segment_names(segments: &[nrrd::Segment]) -> String {
+    if segments.is_empty() {
+        return "none named".into();
+    }
+    segments
+        .iter()
+        .map(|s| format!("'{}'", s.name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Which voxels make the region.

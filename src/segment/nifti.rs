@@ -66,8 +66,9 @@ struct Header {
     to_world: DAffine3,
 }
 
-#[derive(Clone, Copy)]
-enum Datatype {
+/// A voxel's storage type (NIfTI's datatypes; NRRD's `type`s map onto them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Datatype {
     U8,
     I8,
     I16,
@@ -103,7 +104,7 @@ impl Datatype {
         })
     }
 
-    fn bytes(self) -> usize {
+    pub(super) fn bytes(self) -> usize {
         use Datatype::*;
         match self {
             U8 | I8 => 1,
@@ -111,6 +112,31 @@ impl Datatype {
             I32 | U32 | F32 => 4,
             F64 => 8,
         }
+    }
+
+    /// The values stored in `data` (whole voxels of this type), in the
+    /// given byte order.
+    pub(super) fn values(self, data: &[u8], little: bool) -> impl Iterator<Item = f64> + '_ {
+        data.chunks_exact(self.bytes()).map(move |c| {
+            let mut a = [0u8; 8];
+            if little {
+                a[..c.len()].copy_from_slice(c);
+            } else {
+                for (k, &x) in c.iter().rev().enumerate() {
+                    a[k] = x;
+                }
+            }
+            match self {
+                Datatype::U8 => a[0] as f64,
+                Datatype::I8 => a[0] as i8 as f64,
+                Datatype::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+                Datatype::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+                Datatype::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+                Datatype::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+                Datatype::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+                Datatype::F64 => f64::from_le_bytes(a),
+            }
+        })
     }
 }
 
@@ -232,34 +258,10 @@ impl Header {
             ));
         }
         let data = &b[start..start + n * width];
-        let little = self.little;
-        let word = |c: &[u8]| -> [u8; 8] {
-            let mut a = [0u8; 8];
-            if little {
-                a[..c.len()].copy_from_slice(c);
-            } else {
-                for (k, &x) in c.iter().rev().enumerate() {
-                    a[k] = x;
-                }
-            }
-            a
-        };
-        let value = |c: &[u8]| -> f64 {
-            let a = word(c);
-            match self.datatype {
-                Datatype::U8 => a[0] as f64,
-                Datatype::I8 => a[0] as i8 as f64,
-                Datatype::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
-                Datatype::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
-                Datatype::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                Datatype::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                Datatype::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
-                Datatype::F64 => f64::from_le_bytes(a),
-            }
-        };
-        let values: Vec<f32> = data
-            .chunks_exact(width)
-            .map(|c| (value(c) * self.slope + self.intercept) as f32)
+        let values: Vec<f32> = self
+            .datatype
+            .values(data, self.little)
+            .map(|v| (v * self.slope + self.intercept) as f32)
             .collect();
         if values.iter().any(|v| v.is_nan()) {
             return Err("the voxels hold NaN values".into());

@@ -614,3 +614,47 @@ fn fuzz_cube() -> std::sync::Arc<crate::runtime::Node> {
     })
     .clone()
 }
+
+/// NRRD label maps and Slicer segmentations (`segment::nrrd::parse`). On
+/// success: at least one layer, every side at least 1, one value per
+/// voxel, no NaN, a finite and invertible voxel-to-world map, every
+/// segment in a layer there is; a map of whole 16-bit values written back
+/// with `to_bytes` reads the same.
+pub fn label_map(bytes: &[u8]) {
+    use crate::segment::nrrd;
+    let Ok(map) = nrrd::parse(bytes, None) else {
+        return;
+    };
+    assert!(!map.layers.is_empty(), "no layer");
+    let first = &map.layers[0];
+    for v in &map.layers {
+        assert!(v.size.iter().all(|&s| s >= 1), "size {:?}", v.size);
+        assert_eq!(v.size, first.size);
+        assert_eq!(v.values.len(), v.size.iter().product::<usize>());
+        assert!(v.values.iter().all(|x| !x.is_nan()), "a NaN value");
+        let m = v.to_world.matrix3;
+        assert!(m.is_finite() && v.to_world.translation.is_finite());
+        assert!(m.determinant() != 0.0, "singular map {m}");
+    }
+    assert!(map.segments.iter().all(|s| s.layer < map.layers.len()));
+    let shorts = map.layers.iter().all(|v| {
+        v.values
+            .iter()
+            .all(|&x| x.fract() == 0.0 && x.abs() <= i16::MAX as f32)
+    });
+    if shorts {
+        let back = nrrd::parse(&nrrd::to_bytes(&map.layers, &map.segments, true), None)
+            .expect("to_bytes reads back");
+        assert_eq!(back.segments, map.segments);
+        for (a, b) in back.layers.iter().zip(&map.layers) {
+            assert_eq!(a.values, b.values);
+            assert!(
+                a.to_world.abs_diff_eq(
+                    b.to_world,
+                    1e-9 * (1.0 + b.to_world.translation.abs().max_element())
+                ),
+                "the map does not read back"
+            );
+        }
+    }
+}

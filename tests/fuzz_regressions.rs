@@ -33,6 +33,7 @@ const TARGETS: &[(&str, Target)] = &[
     ("db_index", fuzz::db_index),
     ("nrrd", fuzz::nrrd),
     ("nifti", fuzz::nifti),
+    ("label_map", fuzz::label_map),
     ("vtk", fuzz::vtk),
     ("lst", fuzz::lst),
     ("image", fuzz::image),

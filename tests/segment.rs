@@ -519,3 +519,73 @@ fn a_slicer_segmentation_meshes_each_segment_by_name_in_ras_millimetres() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_scene_from_the_mni_brain_bakes_end_to_end() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let scene = root.join("scenes/mni_brain.toml");
+    // The node's mesh: the segmentation's surface, closed, genus 0, within
+    // the face budget, in the scan's millimetres.
+    let spec = organtex::scene::file::load(&scene).unwrap();
+    let (mesh, _) = organtex::scene::build::node_mesh(&spec.nodes[0]).unwrap();
+    assert_eq!(check_surface(&mesh, "brain"), vec![0]);
+    assert!(mesh.num_faces() <= 20_000 && mesh.num_faces() > 15_000);
+    let t1 =
+        ScalarVolume::read(&volumes("mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz")).unwrap();
+    let (blo, bhi) = segment::region_box(&t1, |v| v >= 40.0).unwrap();
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    // The largest piece, smoothed and decimated, inside the region's box
+    // and spanning most of it.
+    assert!(
+        lo.cmpge(blo - 1.0).all() && hi.cmple(bhi + 1.0).all(),
+        "{lo}..{hi} vs {blo}..{bhi}"
+    );
+    assert!(
+        ((hi - lo) / (bhi - blo)).min_element() > 0.9,
+        "{lo}..{hi} vs {blo}..{bhi}"
+    );
+    // The bake: .glb, preview, the interior block and its tets.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("brain");
+    let (ok, stdout, stderr) =
+        organtex(&["bake", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("brain/surface"), "{stdout}");
+    let glb = std::fs::read(out.join("scene.glb")).unwrap();
+    assert_eq!(&glb[0..4], b"glTF");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["facets"][0]["faces"].as_u64().unwrap() as usize,
+        mesh.num_faces()
+    );
+    let tets = &report["interiors"][0]["tet_mesh"];
+    assert!(tets["tets"].as_u64().unwrap() > 10_000, "{report}");
+    assert!(tets["min_dihedral"].as_f64().unwrap() > 10.0, "{report}");
+    for file in ["interior/brain.nrrd", "interior/brain.vtk", "preview.png"] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    // A segmentation that names no region, or a file not there: one error
+    // naming the scene's line.
+    for (edit, why) in [
+        (
+            "threshold = 40.0",
+            "exactly one of `label`, `segment` or `threshold`",
+        ),
+        ("volumes/mni_icbm152_t1", "not found"),
+    ] {
+        let text = std::fs::read_to_string(&scene).unwrap();
+        let bad = match edit {
+            "threshold = 40.0" => text.replace(edit, ""),
+            _ => text.replace(edit, "volumes/missing_t1"),
+        };
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, bad).unwrap();
+        let err = organtex::scene::file::load(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("mesh.segmentation") && err.contains(why),
+            "{err}"
+        );
+        assert!(err.contains("line"), "{err}");
+    }
+}

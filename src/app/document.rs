@@ -141,10 +141,20 @@ impl Document {
                         MeshSpec::File(p) => SavedMesh {
                             file: Some(absolute(p)),
                             uterine_cavity: None,
+                            segmentation: None,
                         },
                         MeshSpec::UterineCavity(c) => SavedMesh {
                             file: None,
                             uterine_cavity: Some(c),
+                            segmentation: None,
+                        },
+                        MeshSpec::Segmentation(s) => SavedMesh {
+                            file: None,
+                            uterine_cavity: None,
+                            segmentation: Some(crate::scene::file::Segmentation {
+                                file: absolute(&s.file),
+                                ..s.clone()
+                            }),
                         },
                     },
                     facet: &n.facets,
@@ -256,6 +266,8 @@ struct SavedMesh<'a> {
     file: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none")]
     uterine_cavity: Option<&'a CavityParams>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    segmentation: Option<crate::scene::file::Segmentation>,
 }
 
 #[cfg(test)]

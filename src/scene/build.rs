@@ -240,6 +240,12 @@ pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
                 node.name, e.key, e.msg
             ))
         })?,
+        MeshSpec::Segmentation(seg) => segmentation_mesh(seg).map_err(|e| match e {
+            Error::Cancelled => e,
+            e => node
+                .origin
+                .error(format!("node '{}': mesh.segmentation: {e}", node.name)),
+        })?,
     };
     let topology = match Topology::build(&mesh) {
         Ok(t) => t,
@@ -255,6 +261,22 @@ pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
         });
     }
     Ok((mesh, topology))
+}
+
+/// The surface of a `[node.mesh.segmentation]`, as `organtex mesh` makes
+/// it: closed, manifold, smoothed and decimated to its face budget, in the
+/// scan's millimetres.
+fn segmentation_mesh(seg: &crate::scene::file::Segmentation) -> Result<TriMesh> {
+    let choice = seg.choice().map_err(Error::invalid)?;
+    let (volume, region) = crate::segment::open(&seg.file, &choice)?;
+    let opts = crate::segment::MeshOptions {
+        region,
+        smooth: seg.smooth,
+        all_components: seg.all_components,
+        faces: Some(seg.faces),
+    };
+    let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, &crate::progress::Silent)?;
+    Ok(mesh)
 }
 
 /// Each of the mesh's facets' settings: the entry named after it, else the

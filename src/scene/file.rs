@@ -65,12 +65,60 @@ struct Node {
     interior: Option<Spanned<Interior>>,
 }
 
-/// Exactly one of `file` or a generator.
+/// Exactly one of `file`, a generator, or a segmentation.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshSource {
     file: Option<Spanned<PathBuf>>,
     uterine_cavity: Option<CavityParams>,
+    segmentation: Option<Spanned<Segmentation>>,
+}
+
+/// `[node.mesh.segmentation]`: one region of a CT or MRI segmentation
+/// (`organtex mesh`'s input and options), meshed when the scene is built.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Segmentation {
+    /// The label map or probability map (.nii, .nii.gz, .nrrd, .seg.nrrd),
+    /// relative to the scene file; absolute once loaded.
+    pub file: PathBuf,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<i64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segment: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
+    /// Taubin smoothing iterations.
+    #[serde(default = "default_smooth")]
+    pub smooth: usize,
+    /// The face budget: a raw voxel surface has hundreds of thousands,
+    /// more than the unwrap and the tet mesh need.
+    #[serde(default = "default_segmentation_faces")]
+    pub faces: usize,
+    #[serde(default)]
+    pub all_components: bool,
+}
+
+fn default_smooth() -> usize {
+    20
+}
+
+fn default_segmentation_faces() -> usize {
+    20_000
+}
+
+impl Segmentation {
+    /// What the region is, as `organtex mesh` takes it.
+    pub fn choice(&self) -> std::result::Result<crate::segment::Choice, String> {
+        use crate::segment::Choice;
+        match (self.label, &self.segment, self.threshold) {
+            (Some(l), None, None) => Ok(Choice::Label(l)),
+            (None, Some(s), None) => Ok(Choice::Segment(s.clone())),
+            (None, None, Some(t)) if t.is_finite() => Ok(Choice::Threshold(t)),
+            (None, None, Some(t)) => Err(format!("threshold {t} is not a number")),
+            _ => Err("give exactly one of `label`, `segment` or `threshold`".into()),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -301,6 +349,7 @@ impl Default for BakeSettings {
 pub enum MeshSpec {
     File(PathBuf),
     UterineCavity(CavityParams),
+    Segmentation(Segmentation),
 }
 
 /// A facet's settings, checked.
@@ -586,8 +635,8 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
         )
     };
     let source = node.mesh.get_ref();
-    let mesh = match (&source.file, &source.uterine_cavity) {
-        (Some(file), None) => {
+    let mesh = match (&source.file, &source.uterine_cavity, &source.segmentation) {
+        (Some(file), None, None) => {
             let full = dir.join(file.get_ref());
             if !full.is_file() {
                 return Err(at(
@@ -598,12 +647,30 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
             }
             MeshSpec::File(full)
         }
-        (None, Some(params)) => MeshSpec::UterineCavity(params.clone()),
+        (None, Some(params), None) => MeshSpec::UterineCavity(params.clone()),
+        (None, None, Some(seg)) => {
+            let mut spec = seg.get_ref().clone();
+            spec.file = dir.join(&spec.file);
+            let here = |msg: String| at(seg.span(), "mesh.segmentation", msg);
+            spec.choice().map_err(here)?;
+            if !spec.file.is_file() {
+                return Err(here(format!("{} not found", spec.file.display())));
+            }
+            if spec.faces < 4 {
+                return Err(here(format!(
+                    "faces must be at least 4, not {}",
+                    spec.faces
+                )));
+            }
+            MeshSpec::Segmentation(spec)
+        }
         _ => {
             return Err(at(
                 node.mesh.span(),
                 "mesh",
-                "give exactly one of `file` or `[node.mesh.uterine_cavity]`".into(),
+                "give exactly one of `file`, `[node.mesh.uterine_cavity]` or \
+                 `[node.mesh.segmentation]`"
+                    .into(),
             ));
         }
     };

@@ -48,7 +48,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::mesh::{TetMesh, signed_volume};
-use super::winding::Winding;
+use super::winding::{CoarseSigns, Winding, sign_of};
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::progress::{self, Progress};
@@ -553,90 +553,6 @@ pub(crate) fn key(a: u32, b: u32) -> u64 {
 #[inline]
 pub(crate) fn unkey(k: u64) -> (u32, u32) {
     ((k >> 32) as u32, k as u32)
-}
-
-/// The sign of `f = 1/2 - w`: -1 inside, 1 outside, 0 on the surface.
-#[inline]
-fn sign_of(w: f64) -> i8 {
-    if w > 0.5 {
-        -1
-    } else if w < 0.5 {
-        1
-    } else {
-        0
-    }
-}
-
-/// Signs of `f` on a grid `COARSE` lattice edges apart, each with its
-/// clearance (its distance from the surface, up to the grid's spacing),
-/// for a closed surface: its winding number is the same all over a ball
-/// the surface does not enter, so a lattice vertex nearer a grid point
-/// than that point's clearance takes the point's sign without a query of
-/// its own. Most of the lattice lies well away from the surface, where a
-/// winding number costs a walk of the far field and a distance query
-/// stops at once; the signs are exactly those the queries give (the
-/// far field's error, under 1e-2, cannot move an integer past 1/2).
-struct CoarseSigns {
-    origin: DVec3,
-    step: f64,
-    dims: [usize; 3],
-    /// Per grid point, x fastest: its sign and clearance.
-    points: Vec<(i8, f64)>,
-}
-
-/// Lattice edges between grid points of `CoarseSigns`: at 4, a grid point
-/// stands for the 64 or so lattice vertices around it.
-const COARSE: f64 = 4.0;
-
-impl CoarseSigns {
-    /// The grid over the surface's box grown by a few lattice edges (the
-    /// lattice's margin; vertices past the grid take a query each).
-    fn new(winding: &Winding, h: f64) -> CoarseSigns {
-        let step = COARSE * h;
-        let (lo, hi) = winding.bvh.bounds();
-        let origin = lo - DVec3::splat(step);
-        let dims = [0, 1, 2].map(|a| ((hi[a] - lo[a]) / step).ceil() as usize + 3);
-        let points = (0..dims[0] * dims[1] * dims[2])
-            .into_par_iter()
-            .map(|i| {
-                let k = [i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1])];
-                let g = origin + step * DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64);
-                let s = sign_of(winding.at(g));
-                // Only clearances up to the farthest a vertex can lie from
-                // its nearest grid point (under a step) matter.
-                let clearance = if s == 0 {
-                    0.0
-                } else {
-                    winding.bvh.distance_below(g, step)
-                };
-                (s, clearance)
-            })
-            .collect();
-        CoarseSigns {
-            origin,
-            step,
-            dims,
-            points,
-        }
-    }
-
-    /// The sign at `p` from its nearest grid point, where `p` lies inside
-    /// that point's clearance.
-    #[inline]
-    fn sign_at(&self, p: DVec3) -> Option<i8> {
-        let u = ((p - self.origin) / self.step).round();
-        let mut k = [0usize; 3];
-        for a in 0..3 {
-            if !(u[a] >= 0.0 && u[a] < self.dims[a] as f64) {
-                return None;
-            }
-            k[a] = u[a] as usize;
-        }
-        let (s, clearance) = self.points[k[0] + self.dims[0] * (k[1] + self.dims[1] * k[2])];
-        let g = self.origin + self.step * u;
-        // Strictly inside, by a hair for the distances' rounding.
-        (s != 0 && p.distance(g) < clearance * (1.0 - 1e-9)).then_some(s)
-    }
 }
 
 /// Where `f = 1/2 - w` crosses zero on the segment from `inside` (f < 0)

@@ -514,7 +514,7 @@ pub fn to_bytes(layers: &[ScalarVolume], segments: &[Segment], lps: bool) -> Vec
         DMat3::IDENTITY
     };
     let m = flip * v.to_world.matrix3;
-    let o = flip * DVec3::from(v.to_world.translation);
+    let o = flip * v.to_world.translation;
     let axis = |c: DVec3| format!("({},{},{})", c.x, c.y, c.z);
     let four = layers.len() > 1;
     let mut h = String::from(

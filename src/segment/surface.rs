@@ -15,7 +15,9 @@
 //! tetrahedron round that edge; the volume is padded by a layer of outside
 //! so the surface closes at the volume's border.
 
-use std::collections::HashMap;
+// Fx hashing: a vertex per cut edge of the grid, millions for a scan;
+// the maps' order is never read.
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::DVec3;
 
@@ -86,7 +88,7 @@ pub fn march(size: [usize; 3], field: Field, progress: &dyn Progress) -> Result<
     };
     let mut positions: Vec<DVec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut on_edge: HashMap<(u64, u64), u32> = HashMap::new();
+    let mut on_edge: HashMap<(u64, u64), u32> = HashMap::default();
     for z in -1..nz as i64 {
         progress::check(progress)?;
         for y in -1..ny as i64 {
@@ -169,7 +171,7 @@ pub fn components(mesh: &TriMesh) -> (Vec<u32>, usize) {
     }
     // Numbered by first face, so the result does not hang on the sets'
     // roots.
-    let mut number: HashMap<usize, u32> = HashMap::new();
+    let mut number: HashMap<usize, u32> = HashMap::default();
     let of_face: Vec<u32> = mesh
         .triangles
         .iter()

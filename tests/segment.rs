@@ -60,6 +60,20 @@ fn check_surface(mesh: &organtex::mesh::TriMesh, what: &str) -> Vec<i64> {
     r.genus
 }
 
+/// `organtex mesh ARGS --json`: its figures, after checking that it
+/// succeeded and called its surface closed and manifold, with its voxels'
+/// volume within `tolerance`.
+fn mesh_json(args: &[&str], tolerance: f64) -> serde_json::Value {
+    let (ok, stdout, stderr) = organtex(&[&["mesh"], args, &["--json"]].concat());
+    assert!(ok, "{stderr}");
+    let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(figures["closed"], true, "{stdout}");
+    assert_eq!(figures["manifold"], true, "{stdout}");
+    let ratio = figures["volume"].as_f64().unwrap() / figures["voxel_volume"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() <= tolerance, "{stdout}");
+    figures
+}
+
 fn write_nii(dir: &Path, name: &str, volume: &ScalarVolume, gzip: bool) -> PathBuf {
     let path = dir.join(name);
     let bytes = nifti::to_bytes(volume);
@@ -201,23 +215,18 @@ fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("head.ply");
     let path = volumes("mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
-    let (ok, stdout, stderr) = organtex(&[
-        "mesh",
-        path.to_str().unwrap(),
-        "--threshold",
-        "40",
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(figures["genus"], serde_json::json!([0]), "{stdout}");
-    assert_eq!(figures["closed"], true);
-    assert_eq!(figures["manifold"], true);
+    let figures = mesh_json(
+        &[
+            path.to_str().unwrap(),
+            "--threshold",
+            "40",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        0.01,
+    );
+    assert_eq!(figures["genus"], serde_json::json!([0]), "{figures}");
     assert_eq!(figures["normals"], "outward");
-    let ratio = figures["volume"].as_f64().unwrap() / figures["voxel_volume"].as_f64().unwrap();
-    assert!((ratio - 1.0).abs() <= 0.01, "{stdout}");
     // The written file reads back as the same closed surface.
     let mesh = organtex::mesh::io::read(&out).unwrap();
     assert_eq!(check_surface(&mesh, "head.ply"), vec![0]);
@@ -225,26 +234,23 @@ fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
     // Decimated to 50k faces: still closed, manifold, genus 0, its volume
     // and no angle under the decimation's floor.
     let small = dir.path().join("head50k.stl");
-    let (ok, stdout, stderr) = organtex(&[
-        "mesh",
-        path.to_str().unwrap(),
-        "--threshold",
-        "40",
-        "--faces",
-        "50000",
-        "-o",
-        small.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let f: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert!(f["faces"].as_u64().unwrap() <= 50_000, "{stdout}");
-    assert_eq!(f["genus"], serde_json::json!([0]), "{stdout}");
-    let ratio = f["volume"].as_f64().unwrap() / f["voxel_volume"].as_f64().unwrap();
-    assert!((ratio - 1.0).abs() <= 0.01, "{stdout}");
+    let f = mesh_json(
+        &[
+            path.to_str().unwrap(),
+            "--threshold",
+            "40",
+            "--faces",
+            "50000",
+            "-o",
+            small.to_str().unwrap(),
+        ],
+        0.01,
+    );
+    assert!(f["faces"].as_u64().unwrap() <= 50_000, "{f}");
+    assert_eq!(f["genus"], serde_json::json!([0]), "{f}");
     assert!(
         f["min_angle"].as_f64().unwrap() >= organtex::mesh::decimate::MIN_ANGLE,
-        "{stdout}"
+        "{f}"
     );
     let mesh = organtex::mesh::io::read(&small).unwrap();
     assert_eq!(check_surface(&mesh, "head50k.stl"), vec![0]);
@@ -427,22 +433,17 @@ fn a_slicer_segmentation_meshes_each_segment_by_name_in_ras_millimetres() {
     // map (its crop in pieces, all kept) closed, manifold, outward and of
     // its voxels' volume.
     let out = dir.path().join("wm.obj");
-    let (ok, stdout, stderr) = organtex(&[
-        "mesh",
-        path.to_str().unwrap(),
-        "--segment",
-        "White Matter",
-        "--all-components",
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let figures: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(figures["closed"], true, "{stdout}");
-    assert_eq!(figures["manifold"], true, "{stdout}");
-    let ratio = figures["volume"].as_f64().unwrap() / figures["voxel_volume"].as_f64().unwrap();
-    assert!((ratio - 1.0).abs() <= 0.02, "{stdout}");
+    mesh_json(
+        &[
+            path.to_str().unwrap(),
+            "--segment",
+            "White Matter",
+            "--all-components",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        0.02,
+    );
     check_surface(
         &organtex::mesh::io::read(&out).unwrap(),
         "white matter crop",

@@ -242,6 +242,9 @@ pub fn bake(
         },
     };
 
+    // The files, the interiors' (tens of MB for an LST) the larger part.
+    progress.stage("writing", 2);
+    check(progress)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let baked = Baked {
         dir: out.to_path_buf(),
@@ -256,7 +259,9 @@ pub fn bake(
     if let (Some(path), Some(picture)) = (&baked.preview, picture) {
         write_png(path, &image::DynamicImage::ImageRgb8(picture))?;
     }
+    progress.advance(1);
     interior::write(&interiors, out)?;
+    progress.advance(1);
     Ok(baked)
 }
 
@@ -387,7 +392,7 @@ fn surface_outputs(
     let contrast_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    progress.stage("writing", 2);
+    progress.stage("glb and preview", 2);
     let (list, glb) = timed(stages, "glb", "", || {
         let list = DrawList::of(baked, blended.as_ref().map(|(b, _)| b.as_slice()));
         gltf::encode(&list, &baked.spec.name, &baked.spec.cameras).map(|glb| (list, glb))

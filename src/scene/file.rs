@@ -662,6 +662,12 @@ fn node_spec(node: &Node, dir: &Path, path: &Path, text: &str) -> Result<NodeSpe
                     spec.faces
                 )));
             }
+            if spec.smooth > 10_000 {
+                return Err(here(format!(
+                    "smooth must be from 0 to 10000 iterations, not {}",
+                    spec.smooth
+                )));
+            }
             MeshSpec::Segmentation(spec)
         }
         _ => {

@@ -205,9 +205,10 @@ impl Header {
                 }
                 "space directions" => {
                     directions = Some(
-                        value
-                            .split_whitespace()
+                        vectors(value)
+                            .iter()
                             .map(|d| {
+                                let d = d.as_str();
                                 if d == "none" {
                                     return Ok(None);
                                 }
@@ -305,7 +306,11 @@ impl Header {
             None => return Err("the header has no 'encoding'".into()),
         };
         let size = [sizes[spatial], sizes[spatial + 1], sizes[spatial + 2]];
-        if size.iter().map(|&s| s as u128).product::<u128>() * layers as u128 > 1 << 32 {
+        let count = size
+            .iter()
+            .chain([&layers])
+            .try_fold(1u64, |n, &k| n.checked_mul(k as u64));
+        if count.is_none_or(|n| n > 1 << 32) {
             return Err(format!(
                 "{}x{}x{} voxels in {layers} layers: more than organtex reads",
                 size[0], size[1], size[2]
@@ -388,14 +393,29 @@ impl Header {
         let need = voxels * self.layers * self.datatype.bytes();
         let inflated;
         let data: &[u8] = if self.gzip {
-            let skip = self.byte_skip.max(0) as usize;
-            let mut out = Vec::with_capacity(need + skip);
-            flate2::read::MultiGzDecoder::new(raw)
-                .take((need + skip) as u64)
+            if self.byte_skip == -1 {
+                return Err("byte skip -1 (data at the end) cannot be used with gzip".into());
+            }
+            // Skipped bytes are read and dropped, not held: the skip is the
+            // header's word, the data may be far shorter.
+            let mut gz = flate2::read::MultiGzDecoder::new(raw);
+            let skipped = std::io::copy(
+                &mut (&mut gz).take(self.byte_skip as u64),
+                &mut std::io::sink(),
+            )
+            .map_err(|e| format!("the gzip data is damaged: {e}"))?;
+            if skipped < self.byte_skip as u64 {
+                return Err(format!(
+                    "the byte skip {} passes the end of the data",
+                    self.byte_skip
+                ));
+            }
+            let mut out = Vec::new();
+            gz.take(need as u64)
                 .read_to_end(&mut out)
                 .map_err(|e| format!("the gzip data is damaged: {e}"))?;
             inflated = out;
-            inflated.get(skip..).unwrap_or(&[])
+            &inflated[..]
         } else if self.byte_skip == -1 {
             &raw[raw.len().saturating_sub(need)..]
         } else {
@@ -443,6 +463,37 @@ impl Header {
     }
 }
 
+/// The tokens of a `space directions` value: `none` and `(x,y,z)` vectors,
+/// spaces allowed inside the brackets (`(1, 0, 0)`), which are taken out.
+fn vectors(value: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut current = String::new();
+    let mut depth = 0;
+    for ch in value.chars() {
+        match ch {
+            '(' => {
+                depth += 1;
+                current.push(ch);
+            }
+            ')' => {
+                depth -= 1;
+                current.push(ch);
+            }
+            c if c.is_whitespace() && depth == 0 => {
+                if !current.is_empty() {
+                    out.push(std::mem::take(&mut current));
+                }
+            }
+            c if c.is_whitespace() => {}
+            c => current.push(c),
+        }
+    }
+    if !current.is_empty() {
+        out.push(current);
+    }
+    out
+}
+
 /// NRRD's type names (the spec's synonyms included) as storage types.
 fn scalar_type(name: &str) -> std::result::Result<Datatype, String> {
     use Datatype::*;
@@ -469,15 +520,14 @@ fn segments(
     fields: &[(usize, &str, &str)],
     layers: usize,
 ) -> std::result::Result<Vec<Segment>, String> {
-    let count = fields.iter().map(|f| f.0 + 1).max().unwrap_or(0);
+    // Grouped by index: only the indices named (a header may say
+    // Segment4000000000_Name), each group searched alone.
+    let mut sorted = fields.to_vec();
+    sorted.sort_by_key(|f| f.0);
     let mut out = Vec::new();
-    for i in 0..count {
-        let field = |name: &str| {
-            fields
-                .iter()
-                .find(|f| f.0 == i && f.1 == name)
-                .map(|f| f.2.trim())
-        };
+    for group in sorted.chunk_by(|x, y| x.0 == y.0) {
+        let i = group[0].0;
+        let field = |name: &str| group.iter().find(|f| f.1 == name).map(|f| f.2.trim());
         let Some(name) = field("Name") else { continue };
         let label = match field("LabelValue") {
             Some(v) => v
@@ -625,6 +675,29 @@ mod tests {
     }
 
     #[test]
+    fn spaced_vectors_and_far_segment_numbers_read() {
+        let v = labels();
+        let bytes = to_bytes(std::slice::from_ref(&v), &[], false);
+        let at = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+        let header = String::from_utf8(bytes[..at].to_vec())
+            .unwrap()
+            .replace("(0,0,2)", "( 0, 0, 2 )")
+            + "\nSegment4000000000_Name:=far\nSegment4000000000_LabelValue:=2\n";
+        let mut edited = header.into_bytes();
+        edited.extend_from_slice(&bytes[at + 1..]);
+        let map = parse(&edited, None).unwrap();
+        assert!(map.layers[0].to_world.abs_diff_eq(v.to_world, 1e-12));
+        assert_eq!(
+            map.segments,
+            [Segment {
+                name: "far".into(),
+                label: 2,
+                layer: 0
+            }]
+        );
+    }
+
+    #[test]
     fn bad_headers_are_refused_with_the_reason() {
         let v = labels();
         let good = String::from_utf8_lossy(&to_bytes(std::slice::from_ref(&v), &[], false))
@@ -645,6 +718,17 @@ mod tests {
             (with("(0,0,2)", "(0,0.8,0)"), "singular"),
             (with("encoding: gzip", "encoding: raw"), "truncated"),
             (with("endian: little\n", ""), "endian"),
+            (
+                with(
+                    "sizes: 4 3 2",
+                    "sizes: 4000000000000 4000000000000 4000000000000",
+                ),
+                "more than organtex reads",
+            ),
+            (
+                with("encoding: gzip\n", "encoding: gzip\nbyte skip: -1\n"),
+                "byte skip -1",
+            ),
         ] {
             let err = parse(&bytes, None).unwrap_err();
             assert!(err.contains(why), "{why}: {err}");

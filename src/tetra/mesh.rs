@@ -486,8 +486,9 @@ fn one_sided(from: &TriMesh, to: &Bvh, step: f64) -> (f64, f64) {
     // bound from the corners cannot pass it needs no query. Non-negative
     // floats order as their bits do. The result is the largest sampled
     // distance whichever thread finds what first (a skipped sample could
-    // not have raised it).
-    let largest = AtomicU64::new(at_vertex.iter().copied().fold(0.0, f64::max).to_bits());
+    // not have raised it). From 0, not the vertices' largest: a vertex no
+    // triangle uses must not prune the triangles' samples.
+    let largest = AtomicU64::new(0f64.to_bits());
     from.triangles
         .par_iter()
         .map(|t| {

@@ -60,6 +60,32 @@ fn check_surface(mesh: &organtex::mesh::TriMesh, what: &str) -> Vec<i64> {
     r.genus
 }
 
+/// The box of `mesh` taken back into voxel indices through `to_world`.
+fn span_in_voxels(mesh: &organtex::mesh::TriMesh, to_world: DAffine3) -> (DVec3, DVec3) {
+    let back = to_world.inverse();
+    mesh.positions.iter().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(lo, hi), p| {
+            let q = back.transform_point3(*p);
+            (lo.min(q), hi.max(q))
+        },
+    )
+}
+
+/// The box of the centres of the voxels holding `label` (x fastest).
+fn label_box(size: [usize; 3], values: &[f32], label: f32) -> (DVec3, DVec3) {
+    let mut box_ = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for (i, _) in values.iter().enumerate().filter(|(_, v)| **v == label) {
+        let c = DVec3::new(
+            (i % size[0]) as f64,
+            (i / size[0] % size[1]) as f64,
+            (i / (size[0] * size[1])) as f64,
+        );
+        box_ = (box_.0.min(c), box_.1.max(c));
+    }
+    box_
+}
+
 /// `organtex mesh ARGS --json`: its figures, after checking that it
 /// succeeded and called its surface closed and manifold, with its voxels'
 /// volume within `tolerance`.
@@ -150,25 +176,8 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
             let centroid = mesh.positions.iter().sum::<DVec3>() / mesh.num_vertices() as f64;
             let want = to_world.transform_point3(DVec3::new(11.0, 9.5, 7.0));
             assert!(centroid.distance(want) < 0.35, "{centroid} vs {want}");
-            let back = to_world.inverse();
-            let (mut vlo, mut vhi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-            for p in &mesh.positions {
-                let q = back.transform_point3(*p);
-                vlo = vlo.min(q);
-                vhi = vhi.max(q);
-            }
-            let (mut ilo, mut ihi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-            for z in 0..read.size[2] {
-                for y in 0..read.size[1] {
-                    for x in 0..read.size[0] {
-                        if read.values[read.index(x, y, z)] == 3.0 {
-                            let c = DVec3::new(x as f64, y as f64, z as f64);
-                            ilo = ilo.min(c);
-                            ihi = ihi.max(c);
-                        }
-                    }
-                }
-            }
+            let (vlo, vhi) = span_in_voxels(&mesh, to_world);
+            let (ilo, ihi) = label_box(read.size, &read.values, 3.0);
             assert!(vlo.abs_diff_eq(ilo - 0.5, 1e-6), "{vlo} vs {ilo}");
             assert!(vhi.abs_diff_eq(ihi + 0.5, 1e-6), "{vhi} vs {ihi}");
             assert!(voxel > 0.0 && (lo - hi).length() > 10.0);
@@ -463,25 +472,8 @@ fn a_slicer_segmentation_meshes_each_segment_by_name_in_ras_millimetres() {
     assert!(ok, "{stderr}");
     let mesh = organtex::mesh::io::read(&out).unwrap();
     check_surface(&mesh, "lesion");
-    let back = ras.inverse();
-    let (mut vlo, mut vhi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-    for p in &mesh.positions {
-        let q = back.transform_point3(*p);
-        vlo = vlo.min(q);
-        vhi = vhi.max(q);
-    }
-    let (mut ilo, mut ihi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-    for z in 0..size[2] {
-        for y in 0..size[1] {
-            for x in 0..size[0] {
-                if layers[1][(z * size[1] + y) * size[0] + x] == 4.0 {
-                    let c = DVec3::new(x as f64, y as f64, z as f64);
-                    ilo = ilo.min(c);
-                    ihi = ihi.max(c);
-                }
-            }
-        }
-    }
+    let (vlo, vhi) = span_in_voxels(&mesh, ras);
+    let (ilo, ihi) = label_box(size, &layers[1], 4.0);
     assert!(
         (vlo - (ilo - 0.5)).abs().max_element() <= 0.5
             && (vhi - (ihi + 0.5)).abs().max_element() <= 0.5,

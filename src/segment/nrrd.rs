@@ -157,6 +157,21 @@ impl Header {
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| at(format!("'{s}' is not a number")))
             };
+            // `(x,y,z)`: a direction or the origin.
+            let vector = |what: &str, v: &str| -> std::result::Result<DVec3, String> {
+                let inner = v
+                    .strip_prefix('(')
+                    .and_then(|v| v.strip_suffix(')'))
+                    .ok_or_else(|| at(format!("{what} '{v}' is not (x,y,z)")))?;
+                let c: Vec<f64> = inner
+                    .split(',')
+                    .map(number)
+                    .collect::<std::result::Result<_, _>>()?;
+                match c[..] {
+                    [x, y, z] => Ok(DVec3::new(x, y, z)),
+                    _ => Err(at(format!("{what} '{v}' has not 3 components"))),
+                }
+            };
             match key.trim() {
                 "type" => datatype = Some(scalar_type(value).map_err(at)?),
                 "dimension" => {
@@ -212,38 +227,12 @@ impl Header {
                                 if d == "none" {
                                     return Ok(None);
                                 }
-                                let inner = d
-                                    .strip_prefix('(')
-                                    .and_then(|d| d.strip_suffix(')'))
-                                    .ok_or_else(|| {
-                                    at(format!("direction '{d}' is not (x,y,z)"))
-                                })?;
-                                let c: Vec<f64> = inner
-                                    .split(',')
-                                    .map(number)
-                                    .collect::<std::result::Result<_, _>>()?;
-                                match c[..] {
-                                    [x, y, z] => Ok(Some(DVec3::new(x, y, z))),
-                                    _ => Err(at(format!("direction '{d}' has not 3 components"))),
-                                }
+                                vector("direction", d).map(Some)
                             })
                             .collect::<std::result::Result<_, String>>()?,
                     )
                 }
-                "space origin" => {
-                    let inner = value
-                        .strip_prefix('(')
-                        .and_then(|d| d.strip_suffix(')'))
-                        .ok_or_else(|| at(format!("origin '{value}' is not (x,y,z)")))?;
-                    let c: Vec<f64> = inner
-                        .split(',')
-                        .map(number)
-                        .collect::<std::result::Result<_, _>>()?;
-                    origin = match c[..] {
-                        [x, y, z] => DVec3::new(x, y, z),
-                        _ => return Err(at(format!("origin '{value}' has not 3 components"))),
-                    };
-                }
+                "space origin" => origin = vector("origin", value)?,
                 "spacings" => {
                     spacings = Some(
                         value

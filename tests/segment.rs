@@ -1,7 +1,8 @@
 //! Segmentations to surfaces (issue 40): NIfTI-1 read with its
 //! voxel-to-world map, the region's surface closed, manifold and turned
 //! outward, in world millimetres, with its voxels' volume; real MRI data
-//! (the MNI ICBM152 white matter and head); bad files refused by name.
+//! (the MNI ICBM152 white matter, and the brain from its T1); bad files
+//! refused by name.
 
 mod common;
 use common::organtex;
@@ -148,6 +149,7 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
             region: Region::Label(3),
             smooth: 0,
             all_components: false,
+            fill_voids: false,
             faces: None,
         };
         let (mesh, report) = segment::mesh(&read, &path, &opts, &Silent).unwrap();
@@ -185,6 +187,33 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
     }
 }
 
+/// A region round an enclosed void (label 1 is a box round the
+/// ellipsoid of label 3): by default the void is an inner shell of the
+/// surface, facing into it, and the enclosed volume is the region's own;
+/// `--fill-voids` makes one sheet holding the void's voxels too.
+#[test]
+fn a_void_is_an_inner_shell_unless_filled() {
+    let dir = tempfile::tempdir().unwrap();
+    let volume = labelled(DAffine3::from_translation(DVec3::new(3.0, -2.0, 1.0)));
+    let path = write_nii(dir.path(), "box.nii", &volume, false);
+    let count = |l: f32| volume.values.iter().filter(|&&v| v == l).count() as u64;
+    let out = dir.path().join("box.stl");
+    let (input, output) = (path.to_str().unwrap(), out.to_str().unwrap());
+    let base = ["--label", "1", "--smooth", "0", "-o", output];
+    let kept = mesh_json(&[&[input], &base[..]].concat(), 0.03);
+    assert_eq!(kept["voids"], 1, "{kept}");
+    assert_eq!(kept["voids_filled"], false, "{kept}");
+    assert_eq!(kept["genus"], serde_json::json!([0, 0]), "{kept}");
+    assert_eq!(kept["voxels"], count(1.0), "{kept}");
+    assert_eq!(kept["normals"], "outward", "{kept}");
+    let filled = mesh_json(&[&[input], &base[..], &["--fill-voids"]].concat(), 0.03);
+    assert_eq!(filled["voids"], 1, "{filled}");
+    assert_eq!(filled["voids_filled"], true, "{filled}");
+    assert_eq!(filled["genus"], serde_json::json!([0]), "{filled}");
+    assert_eq!(filled["voxels"], count(1.0) + count(3.0), "{filled}");
+    assert_eq!(filled["region_voxels"], count(1.0), "{filled}");
+}
+
 #[test]
 fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
     let path = volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz");
@@ -195,6 +224,7 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
         region: Region::Threshold(127.5),
         smooth: 20,
         all_components: false,
+        fill_voids: false,
         faces: None,
     };
     let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
@@ -220,9 +250,9 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
 }
 
 #[test]
-fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
+fn the_brain_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("head.ply");
+    let out = dir.path().join("brain.ply");
     let path = volumes("mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz");
     let figures = mesh_json(
         &[
@@ -238,11 +268,11 @@ fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
     assert_eq!(figures["normals"], "outward");
     // The written file reads back as the same closed surface.
     let mesh = organtex::mesh::io::read(&out).unwrap();
-    assert_eq!(check_surface(&mesh, "head.ply"), vec![0]);
+    assert_eq!(check_surface(&mesh, "brain.ply"), vec![0]);
     assert_eq!(mesh.num_faces() as u64, figures["faces"].as_u64().unwrap());
     // Decimated to 50k faces: still closed, manifold, genus 0, its volume
     // and no angle under the decimation's floor.
-    let small = dir.path().join("head50k.stl");
+    let small = dir.path().join("brain50k.stl");
     let f = mesh_json(
         &[
             path.to_str().unwrap(),
@@ -262,7 +292,7 @@ fn the_head_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
         "{f}"
     );
     let mesh = organtex::mesh::io::read(&small).unwrap();
-    assert_eq!(check_surface(&mesh, "head50k.stl"), vec![0]);
+    assert_eq!(check_surface(&mesh, "brain50k.stl"), vec![0]);
 }
 
 #[test]

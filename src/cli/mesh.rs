@@ -1,5 +1,5 @@
 //! `organtex mesh VOLUME (--label N | --segment NAME | --threshold T) -o OUT.obj|.ply|.stl
-//! [--smooth K] [--all-components] [--json]`: one region of a CT or MRI
+//! [--faces N] [--smooth K] [--all-components] [--fill-voids] [--json]`: one region of a CT or MRI
 //! segmentation as a closed, manifold surface in the scanner's millimetres.
 
 use std::path::PathBuf;
@@ -37,9 +37,16 @@ pub struct Args {
     /// staircase away without shrinking the region; 0 keeps the raw surface.
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     smooth: u32,
-    /// Keep every connected piece of the surface (default: the largest).
+    /// Keep every piece of the region (default: the largest, by voxels,
+    /// with its enclosed voids).
     #[arg(long)]
     all_components: bool,
+    /// Fill the enclosed voids of the kept pieces (a ventricle inside the
+    /// white matter, a cyst inside an organ). Default: each void is kept
+    /// as an inner shell of the surface, facing into it, so the enclosed
+    /// volume is the tissue's.
+    #[arg(long)]
+    fill_voids: bool,
     /// Decimate to at most this many faces: quadric error edge collapses
     /// that keep the surface closed, manifold and of the same genus, no
     /// angle made smaller than 20 degrees (default: every face marching
@@ -83,6 +90,7 @@ pub fn run(args: Args) -> Result<()> {
         region,
         smooth: args.smooth as usize,
         all_components: args.all_components,
+        fill_voids: args.fill_voids,
         faces: args.faces.map(|f| f as usize),
     };
     let bars = Bars::new();
@@ -116,14 +124,28 @@ pub fn run(args: Args) -> Result<()> {
         super::thousands(f.report.voxels as usize),
         f.report.voxel_volume
     );
+    if f.report.voids > 0 || f.report.components > f.report.components_kept {
+        println!(
+            "  kept {} of the region's {} voxels; {} enclosed void{} {}",
+            super::thousands(f.report.voxels as usize),
+            super::thousands(f.report.region_voxels as usize),
+            f.report.voids,
+            if f.report.voids == 1 { "" } else { "s" },
+            if f.report.voids_filled {
+                "filled"
+            } else {
+                "kept as inner shells (--fill-voids fills them)"
+            }
+        );
+    }
     println!(
-        "  surface: {} vertices, {} faces, {} of {} piece{} kept, genus {:?}; {}, {}, normals {}",
+        "  surface: {} vertices, {} faces, {} of {} piece{} kept, genus {}; {}, {}, normals {}",
         super::thousands(f.report.vertices),
         super::thousands(f.report.faces),
         f.report.components_kept,
         f.report.components,
         if f.report.components == 1 { "" } else { "s" },
-        f.genus,
+        genus_list(&f.genus),
         if f.closed { "closed" } else { "open" },
         if f.manifold {
             "manifold"
@@ -141,4 +163,21 @@ pub fn run(args: Args) -> Result<()> {
     );
     println!("wrote {}", f.output.display());
     Ok(())
+}
+
+/// The genus of each closed sheet, the first few listed (voids add a
+/// sheet each; `--json` lists them all).
+fn genus_list(genus: &[i64]) -> String {
+    const SHOWN: usize = 6;
+    let shown: Vec<String> = genus.iter().take(SHOWN).map(|g| g.to_string()).collect();
+    match genus.len() {
+        1 => shown[0].clone(),
+        n if n <= SHOWN => format!("[{}]", shown.join(", ")),
+        n => format!(
+            "[{}, ... {} more sheets, genus {} in all]",
+            shown.join(", "),
+            n - SHOWN,
+            genus.iter().sum::<i64>()
+        ),
+    }
 }

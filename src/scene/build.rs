@@ -273,6 +273,7 @@ fn segmentation_mesh(seg: &crate::scene::file::Segmentation) -> Result<TriMesh> 
         region,
         smooth: seg.smooth,
         all_components: seg.all_components,
+        fill_voids: seg.fill_voids,
         faces: Some(seg.faces),
     };
     let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, &crate::progress::Silent)?;

@@ -97,6 +97,8 @@ pub struct Segmentation {
     pub faces: usize,
     #[serde(default)]
     pub all_components: bool,
+    #[serde(default)]
+    pub fill_voids: bool,
 }
 
 fn default_smooth() -> usize {

@@ -13,6 +13,7 @@
 
 pub mod nifti;
 pub mod nrrd;
+pub mod pieces;
 pub mod smooth;
 pub mod surface;
 
@@ -165,6 +166,9 @@ pub struct MeshOptions {
     pub smooth: usize,
     /// Keep every connected piece, not only the largest.
     pub all_components: bool,
+    /// Fill the kept pieces' enclosed voids (default: each void is an
+    /// inner shell of the surface, facing into it).
+    pub fill_voids: bool,
     /// Decimate to at most this many faces (quadric error collapses that
     /// keep the surface manifold, then tangential relaxation).
     pub faces: Option<usize>,
@@ -176,12 +180,20 @@ const RELAX_ROUNDS: usize = 5;
 /// What `mesh` measured.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct MeshReport {
-    /// The region's voxels and their world volume, mm^3.
+    /// The region's voxels.
+    pub region_voxels: u64,
+    /// The voxels meshed (the kept pieces, their voids if filled) and
+    /// their world volume, mm^3: what `volume` should come near.
     pub voxels: u64,
     pub voxel_volume: f64,
-    /// Pieces of surface the region had, and how many were kept.
+    /// Pieces the region had (voxels joined as the surface joins them),
+    /// and how many were kept.
     pub components: usize,
     pub components_kept: usize,
+    /// Enclosed voids in the kept pieces (each an inner shell of the
+    /// surface unless filled), and whether they were filled.
+    pub voids: usize,
+    pub voids_filled: bool,
     pub vertices: usize,
     pub faces: usize,
     /// The enclosed volume of what was kept, mm^3.
@@ -198,22 +210,55 @@ pub fn mesh(
     progress: &dyn Progress,
 ) -> Result<(TriMesh, MeshReport)> {
     let inside = select(volume, name, opts.region)?;
-    let voxels = inside.iter().filter(|&&b| b).count() as u64;
+    let region_voxels = inside.iter().filter(|&&b| b).count() as u64;
+    progress.stage("finding the region's pieces and voids", 1);
+    let found = pieces::pieces(volume.size, &inside, progress)?;
+    let components = found.count();
+    // The largest piece by voxels, with its voids (see `pieces`).
+    let mut kept: Vec<bool> = if opts.all_components {
+        inside.clone()
+    } else {
+        let largest = found.largest().expect("select refuses an empty region");
+        found.of_voxel.iter().map(|&p| p == largest).collect()
+    };
+    drop(found);
+    let (void, voids) = pieces::voids(volume.size, &kept, progress)?;
+    if opts.fill_voids {
+        for (k, v) in kept.iter_mut().zip(&void) {
+            *k |= *v;
+        }
+    }
+    drop(void);
+    progress.advance(1);
+    let voxels = kept.iter().filter(|&&b| b).count() as u64;
     // One step per slab of cubes, the padding's included.
     progress.stage("extracting the surface", volume.size[2] as u64 + 1);
+    // A grey volume keeps its values where the kept voxels are its own (the
+    // surface is interpolated there); voxels of dropped pieces go below
+    // the level and filled voids onto it. No tetrahedron edge joins a kept
+    // voxel to either (they are other pieces, or enclosed), so no crossing
+    // moves.
+    let adjusted: Vec<f32>;
     let field = match opts.region {
-        // A label's indicator crosses 1/2 halfway between voxel centres.
-        Region::Label(_) => surface::Field::Binary(&inside),
-        Region::Threshold(t) => surface::Field::Scalar(&volume.values, t as f32),
+        Region::Label(_) => surface::Field::Binary(&kept),
+        Region::Threshold(t) if kept == inside => surface::Field::Scalar(&volume.values, t as f32),
+        Region::Threshold(t) => {
+            let level = t as f32;
+            adjusted = volume
+                .values
+                .iter()
+                .zip(kept.iter().zip(&inside))
+                .map(|(&v, (&k, &i))| match (k, i) {
+                    (true, false) => level,
+                    (false, true) => f32::MIN,
+                    _ => v,
+                })
+                .collect();
+            surface::Field::Scalar(&adjusted, level)
+        }
     };
-    let raw = surface::march(volume.size, field, progress)?;
-    let (mut mesh, components) = if opts.all_components {
-        let n = surface::components(&raw).1;
-        (raw, n)
-    } else {
-        surface::largest_component(raw)
-    };
-    let kept = if opts.all_components { components } else { 1 };
+    let mut mesh = surface::march(volume.size, field, progress)?;
+    let kept_pieces = if opts.all_components { components } else { 1 };
     // Smoothing in voxel units (the grid's own isotropy), then to world.
     smooth::taubin(&mut mesh, opts.smooth, progress)?;
     for p in &mut mesh.positions {
@@ -232,10 +277,13 @@ pub fn mesh(
             .map_err(|e| e.in_file(name))?;
     }
     let report = MeshReport {
+        region_voxels,
         voxels,
         voxel_volume: voxels as f64 * volume.voxel_volume(),
         components,
-        components_kept: kept,
+        components_kept: kept_pieces,
+        voids,
+        voids_filled: opts.fill_voids && voids > 0,
         vertices: mesh.num_vertices(),
         faces: mesh.num_faces(),
         volume: mesh.signed_volume(),

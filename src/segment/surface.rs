@@ -22,8 +22,8 @@ use rustc_hash::FxHashMap as HashMap;
 use glam::DVec3;
 
 use crate::error::Result;
+use crate::mesh::TriMesh;
 use crate::mesh::dsu::DisjointSets;
-use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
 /// The field the surface is a level set of.
@@ -183,25 +183,4 @@ pub fn components(mesh: &TriMesh) -> (Vec<u32>, usize) {
         .collect();
     let n = number.len();
     (of_face, n)
-}
-
-/// The piece with the most faces (the first of equals), its vertices
-/// renumbered in order of use; and how many pieces there were.
-pub fn largest_component(mesh: TriMesh) -> (TriMesh, usize) {
-    let (of_face, n) = components(&mesh);
-    if n <= 1 {
-        return (mesh, n);
-    }
-    let mut faces = vec![0usize; n];
-    for &c in &of_face {
-        faces[c as usize] += 1;
-    }
-    let keep = (0..n)
-        .max_by_key(|&c| (faces[c], std::cmp::Reverse(c)))
-        .unwrap_or(0) as u32;
-    let faces: Vec<FaceId> = (0..mesh.num_faces())
-        .filter(|&f| of_face[f] == keep)
-        .map(FaceId::from)
-        .collect();
-    (crate::mesh::submesh::extract(&mesh, &faces).0, n)
 }

@@ -547,7 +547,7 @@ fn a_scene_from_the_mni_brain_bakes_end_to_end() {
     // The node's mesh: the segmentation's surface, closed, genus 0, within
     // the face budget, in the scan's millimetres.
     let spec = organtex::scene::file::load(&scene).unwrap();
-    let (mesh, _) = organtex::scene::build::node_mesh(&spec.nodes[0]).unwrap();
+    let (mesh, _) = organtex::scene::build::node_mesh(&spec.nodes[0], &Silent).unwrap();
     assert_eq!(check_surface(&mesh, "brain"), vec![0]);
     assert!(mesh.num_faces() <= 20_000 && mesh.num_faces() > 15_000);
     let t1 =

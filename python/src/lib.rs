@@ -470,7 +470,7 @@ fn check_scene(py: Python<'_>, scene: PathBuf) -> PyResult<()> {
     py.detach(|| -> organtex::Result<()> {
         let spec = organtex::scene::file::load(&scene)?;
         for node in &spec.nodes {
-            let (mesh, _) = organtex::scene::build::node_mesh(node)?;
+            let (mesh, _) = organtex::scene::build::node_mesh(node, &organtex::progress::Silent)?;
             organtex::scene::build::match_facets(node, &mesh)?;
         }
         Ok(())

@@ -59,7 +59,7 @@ impl Document {
         let mut meshes = Vec::new();
         let mut topologies = Vec::new();
         for node in &mut spec.nodes {
-            let (mesh, topology) = node_mesh(node)?;
+            let (mesh, topology) = node_mesh(node, &crate::progress::Silent)?;
             let names = mesh
                 .facets
                 .as_ref()

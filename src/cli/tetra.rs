@@ -78,6 +78,18 @@ pub fn run(args: Args) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     // The default resolution measured it already; otherwise measure it.
     let hausdorff = report.hausdorff.unwrap_or_else(|| tets.hausdorff(&mesh));
+    if report.hausdorff.is_some() && hausdorff.relative() > tetra::DEFAULT_HAUSDORFF {
+        eprintln!(
+            "warning: the tets' boundary stays {:.2}% of the diagonal from {} after {} lattices, \
+             above the default resolution's {}%: finer lattices stopped bringing it down (parts \
+             thinner than a cell, or a surface open or crossing itself); --edge-length sets a \
+             finer one",
+            100.0 * hausdorff.relative(),
+            args.mesh.display(),
+            report.attempts,
+            100.0 * tetra::DEFAULT_HAUSDORFF
+        );
+    }
     let quality = tets.quality();
     tets.set_tet_attribute("min_dihedral", 1, tets.min_dihedrals())?;
     write(&args.output, &tets)?;

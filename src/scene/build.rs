@@ -230,8 +230,9 @@ pub fn ensure_tissues(
 }
 
 /// The node's mesh, read or generated, repaired if needed, with facets; and
-/// its topology.
-pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
+/// its topology. `progress` sees a segmentation meshed (the one source
+/// that takes seconds) and may cancel it.
+pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, Topology)> {
     let mut mesh = match &node.mesh {
         MeshSpec::File(path) => io::read(path)?,
         MeshSpec::UterineCavity(params) => uterus::generate(params).map_err(|e| {
@@ -240,7 +241,7 @@ pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
                 node.name, e.key, e.msg
             ))
         })?,
-        MeshSpec::Segmentation(seg) => segmentation_mesh(seg).map_err(|e| match e {
+        MeshSpec::Segmentation(seg) => segmentation_mesh(seg, progress).map_err(|e| match e {
             Error::Cancelled => e,
             e => node
                 .origin
@@ -266,7 +267,10 @@ pub fn node_mesh(node: &NodeSpec) -> Result<(TriMesh, Topology)> {
 /// The surface of a `[node.mesh.segmentation]`, as `organtex mesh` makes
 /// it: closed, manifold, smoothed and decimated to its face budget, in the
 /// scan's millimetres.
-fn segmentation_mesh(seg: &crate::scene::file::Segmentation) -> Result<TriMesh> {
+fn segmentation_mesh(
+    seg: &crate::scene::file::Segmentation,
+    progress: &dyn Progress,
+) -> Result<TriMesh> {
     let choice = seg.choice().map_err(Error::invalid)?;
     let (volume, region) = crate::segment::open(&seg.file, &choice)?;
     let opts = crate::segment::MeshOptions {
@@ -276,7 +280,7 @@ fn segmentation_mesh(seg: &crate::scene::file::Segmentation) -> Result<TriMesh> 
         fill_voids: seg.fill_voids,
         faces: Some(seg.faces),
     };
-    let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, &crate::progress::Silent)?;
+    let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, progress)?;
     Ok(mesh)
 }
 
@@ -321,7 +325,7 @@ fn build_node(
     spans: &mut Vec<Span>,
 ) -> Result<BakedNode> {
     let name = node.name.as_str();
-    let (mesh, topology) = timed(spans, "mesh", name, || node_mesh(node))?;
+    let (mesh, topology) = timed(spans, "mesh", name, || node_mesh(node, progress))?;
     let settings = match_facets(node, &mesh)?;
     let viewpoints = if spec.cameras.is_empty() {
         Viewpoints::Orbit {

@@ -11,10 +11,12 @@ mean curvature over the vertices, and the Hausdorff distance between the
 surface and the region's voxel boundary (the faces between its voxels and
 the others), in voxels: both ways, each surface sampled (the mesh at its
 vertices and about every 0.3 voxel over its triangles, the voxel faces at
-nine points each), a point's distance to the mesh that of the nearest
-mesh sample, to the voxel boundary the exact distance to the nearest of
-its 16 nearest voxel faces. The mesh-side figure may overstate the true
-one by up to the samples' spacing (0.2 voxel). Time is wall-clock, each
+nine points each, half a voxel apart), a point's distance to the mesh
+that of the nearest mesh sample, to the voxel boundary the exact
+distance to the nearest of its 16 nearest voxel faces. Sampling makes
+each figure approximate: "from voxels" may overstate the true one by up
+to about 0.17 voxel (the mesh samples' spacing) or understate it by up
+to about 0.35 (the faces' samples); "to voxels" may understate it. Time is wall-clock, each
 tool from the file to its surface.
 
 Usage: tools/compare_mesh.py [--organtex target/release/organtex]

@@ -121,14 +121,14 @@ pub fn run(args: Args) -> Result<()> {
         f.size[0],
         f.size[1],
         f.size[2],
-        super::thousands(f.report.voxels as usize),
-        f.report.voxel_volume
+        super::thousands(f.report.region_voxels as usize),
+        f.report.region_voxels as f64 * volume.voxel_volume()
     );
     if f.report.voids > 0 || f.report.components > f.report.components_kept {
         println!(
-            "  kept {} of the region's {} voxels; {} enclosed void{} {}",
+            "  meshed {} voxels ({:.1} mm^3; the largest piece unless --all-components); {} enclosed void{} {}",
             super::thousands(f.report.voxels as usize),
-            super::thousands(f.report.region_voxels as usize),
+            f.report.voxel_volume,
             f.report.voids,
             if f.report.voids == 1 { "" } else { "s" },
             if f.report.voids_filled {

@@ -235,15 +235,16 @@ pub fn mesh(
     progress.stage("extracting the surface", volume.size[2] as u64 + 1);
     // A grey volume keeps its values where the kept voxels are its own (the
     // surface is interpolated there); voxels of dropped pieces go below
-    // the level and filled voids onto it. No tetrahedron edge joins a kept
-    // voxel to either (they are other pieces, or enclosed), so no crossing
-    // moves.
+    // the level and filled voids onto it. No tetrahedron edge the surface
+    // crosses has a rewritten voxel at an end (a dropped piece's
+    // neighbours are all outside, a filled void's all inside), so no
+    // crossing moves.
     let adjusted: Vec<f32>;
     let field = match opts.region {
         Region::Label(_) => surface::Field::Binary(&kept),
-        Region::Threshold(t) if kept == inside => surface::Field::Scalar(&volume.values, t as f32),
+        Region::Threshold(t) if kept == inside => surface::Field::Scalar(&volume.values, level(t)),
         Region::Threshold(t) => {
-            let level = t as f32;
+            let level = level(t);
             adjusted = volume
                 .values
                 .iter()
@@ -310,7 +311,8 @@ fn select(volume: &ScalarVolume, name: &Path, region: Region) -> Result<Vec<bool
             if !t.is_finite() {
                 return Err(Error::invalid(format!("the threshold {t} is not a number")));
             }
-            volume.values.iter().map(|&v| v as f64 >= t).collect()
+            let level = level(t);
+            volume.values.iter().map(|&v| v >= level).collect()
         }
     };
     let count = inside.iter().filter(|&&b| b).count();
@@ -338,6 +340,18 @@ fn select(volume: &ScalarVolume, name: &Path, region: Region) -> Result<Vec<bool
         ));
     }
     Ok(inside)
+}
+
+/// The threshold as the f32 values are compared with it: the smallest f32
+/// at or above `t`, so "at or above t" picks the same voxels in f64 and in
+/// f32, and the pieces found are the ones the surface marches round.
+fn level(t: f64) -> f32 {
+    let level = t as f32;
+    if (level as f64) < t {
+        level.next_up()
+    } else {
+        level
+    }
 }
 
 /// The first few distinct whole values of a label map, for an error.

@@ -5,10 +5,12 @@
 //! tetrahedron edge when their offset is a non-zero 0/1 vector or its
 //! negative (the six face neighbours, six face diagonals and two main
 //! diagonals: 14 neighbours). The surface separates inside from outside
-//! along exactly those edges, so two inside voxels lie in one closed piece
-//! of surface when a path of such edges joins them through inside voxels,
-//! and the same holds for outside voxels: a void is an outside piece that
-//! does not reach the volume's border. Counting pieces on the surface
+//! along exactly those edges, so two inside voxels lie in one solid piece
+//! when a path of such edges joins them through inside voxels, and the
+//! same holds for outside voxels: a void is an outside piece that does not
+//! reach the volume's border. Each sheet of the surface parts one inside
+//! piece from one outside piece: sheets = inside pieces + outside pieces
+//! less one. Counting pieces on the surface
 //! instead would split a piece from the shells of its own voids (keeping
 //! the largest surface would drop them and count the voids as tissue).
 

@@ -10,9 +10,9 @@
 //! same holds for outside voxels: a void is an outside piece that does not
 //! reach the volume's border. Each sheet of the surface parts one inside
 //! piece from one outside piece: sheets = inside pieces + outside pieces
-//! less one. Counting pieces on the surface
-//! instead would split a piece from the shells of its own voids (keeping
-//! the largest surface would drop them and count the voids as tissue).
+//! less one. Counting pieces on the surface instead would split a piece
+//! from the shells of its own voids (keeping the largest surface would drop
+//! them and count the voids as tissue).
 
 use crate::error::Result;
 use crate::progress::{self, Progress};
@@ -184,7 +184,11 @@ mod tests {
             &Silent,
         )
         .unwrap();
-        assert_eq!(super::super::surface::components(&march).1, 3 + 1);
+        let sheets = crate::mesh::info::analyse(march, false)
+            .unwrap()
+            .report
+            .components;
+        assert_eq!(sheets, 3 + 1);
         // (1, 1, 0) from the corner is a neighbour: one piece fewer.
         inside[idx(6, 0, 1)] = false;
         inside[idx(6, 6, 1)] = true;

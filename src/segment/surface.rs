@@ -23,7 +23,6 @@ use glam::DVec3;
 
 use crate::error::Result;
 use crate::mesh::TriMesh;
-use crate::mesh::dsu::DisjointSets;
 use crate::progress::{self, Progress};
 
 /// The field the surface is a level set of.
@@ -159,28 +158,4 @@ fn crossings(p: &[[i64; 3]; 4], v: &[(bool, f32); 4]) -> (Vec<[(usize, usize); 3
     let centre =
         |ks: &[usize]| ks.iter().map(|&k| point(p[k])).sum::<DVec3>() / ks.len().max(1) as f64;
     (faces, centre(&outs) - centre(&ins))
-}
-
-/// Each face's connected piece (faces sharing a vertex), numbered from 0 in
-/// order of their first face, and the number of pieces.
-pub fn components(mesh: &TriMesh) -> (Vec<u32>, usize) {
-    let mut sets = DisjointSets::new(mesh.num_vertices());
-    for t in &mesh.triangles {
-        sets.union(t[0] as usize, t[1] as usize);
-        sets.union(t[0] as usize, t[2] as usize);
-    }
-    // Numbered by first face, so the result does not hang on the sets'
-    // roots.
-    let mut number: HashMap<usize, u32> = HashMap::default();
-    let of_face: Vec<u32> = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let root = sets.find(t[0] as usize);
-            let next = number.len() as u32;
-            *number.entry(root).or_insert(next)
-        })
-        .collect();
-    let n = number.len();
-    (of_face, n)
 }

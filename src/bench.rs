@@ -190,11 +190,13 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "stereology 128",
             min_runs: 1,
-            what: "particles from database/sources/ihc.png: profiles, unfolding, placement, annealing, and the photograph copied into particles and binder by guided block synthesis, 128^3 (target <= 20 s)",
+            what: "particles from database/sources/cat4_ihc_endometrium_stroma_nuclei_endonuke_a.png (stromal nuclei): split, profiles, unfolding, placement, annealing, and the photograph copied into particles and binder by guided block synthesis, 128^3 (target <= 20 s)",
             prepare: |root| {
-                let img =
-                    crate::synth::exemplar::read_image(&root.join("database/sources/ihc.png"))?
-                        .to_rgb8();
+                let img = crate::synth::exemplar::read_image(
+                    &root
+                        .join("database/sources/cat4_ihc_endometrium_stroma_nuclei_endonuke_a.png"),
+                )?
+                .to_rgb8();
                 let (w, h) = (img.width() as usize, img.height() as usize);
                 let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
                 Ok(Box::new(move || {

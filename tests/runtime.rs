@@ -189,7 +189,8 @@ fn nodes() -> Vec<Arc<Node>> {
         (InteriorMethod::Layered, &layered),
         (InteriorMethod::Stereology, &photo),
     ] {
-        let volume = interior_block(texture, &[], 16, method, 3, &Silent).unwrap();
+        let volume =
+            interior_block(texture, &[], Default::default(), 16, method, 3, &Silent).unwrap();
         let placement = Placement::new(DVec3::new(0.1, -0.2, 0.3), 0.05).unwrap();
         out.push(Arc::new(Node::new(
             &format!("{method:?}"),

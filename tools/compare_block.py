@@ -166,7 +166,10 @@ def stereology_block(organtex, image, side, tmp):
     import numpy as np
     from PIL import Image
     block = tmp / "particles.nrrd"
-    out = run([organtex, "stereology", image, "--size", side, "-o", block, "--json"])
+    # Glands and stroma both run across the ihc photograph, and auto
+    # refuses to choose: the light class, as before issue 38.
+    particles = "light" if Path(image).name == "ihc.png" else "auto"
+    out = run([organtex, "stereology", image, "--size", side, "--particles", particles, "-o", block, "--json"])
     seconds = sum(json.loads(out)["seconds"].values())
     data = block.read_bytes()
     voxels = np.frombuffer(data[data.index(b"\n\n") + 2:], np.uint8).reshape(side, side, side, 3)  # z, y, x

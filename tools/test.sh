@@ -119,6 +119,9 @@ python3 tools/compare_morph.py --quick --uterus --check --organtex target/releas
 step "tools/compare_tet.py --quick (organtex tetra vs TetGen and fTetWild, files read by meshio)"
 python3 tools/compare_tet.py --quick --organtex target/release/organtex
 
+step "tools/check_stereology.py --large 4 8 12 20 --check (noisy 2048x2048 photographs: the particle class, size distribution TV <= 0.08, volume fraction within 10%)"
+python3 tools/check_stereology.py --large 4 8 12 20 --kinds 2 --size 64 --check --organtex target/release/organtex
+
 step "Python package (maturin develop into target/pyorgantex) and pytest: the API, batch bakes on a local two-node Ray cluster"
 venv="$PWD/target/pyorgantex"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"

@@ -120,6 +120,7 @@ pub(super) fn interiors(
                     interior_block(
                         texture,
                         &interior.photographs,
+                        interior.particles,
                         n,
                         interior.method,
                         k as u64,

@@ -11,14 +11,20 @@ use super::progress::Bars;
 #[derive(clap::Args)]
 pub struct Args {
     /// Photographs of sections of the same material (PNG or JPEG), the
-    /// same pixel scale: particles (the minority colour class) in a
-    /// binder.
+    /// same pixel scale: particles (one colour class) in a binder (the
+    /// other), split alike in all of them.
     #[arg(required = true)]
     photos: Vec<PathBuf>,
     /// What is not tissue, black (for every photograph): profiles touching
     /// it are left out and corrected for, like those touching the border.
     #[arg(long, value_name = "IMAGE")]
     mask: Option<PathBuf>,
+    /// Which colour class the particles are: auto (the binder is the
+    /// phase connected across the photographs, else the minority by
+    /// area; refused when neither decides), light, dark, or the class
+    /// nearer a colour RRGGBB.
+    #[arg(long, default_value = "auto", value_name = "auto|light|dark|RRGGBB")]
+    particles: stereology::Particles,
     /// Particle-size bins reported.
     #[arg(long, default_value_t = 10)]
     bins: usize,
@@ -71,7 +77,12 @@ pub fn run(args: Args) -> Result<()> {
         colour_classes: args.colour_classes,
     };
     opts.check()?;
-    let sections = stereology::read_sections(&args.photos, args.mask.as_deref(), args.seed)?;
+    let sections = stereology::read_sections(
+        &args.photos,
+        args.mask.as_deref(),
+        args.particles,
+        args.seed,
+    )?;
     let bars = Bars::new();
     let (volume, report) =
         stereology::synthesize(&sections, &opts, &bars).map_err(|e| e.in_file(&args.photos[0]))?;
@@ -103,6 +114,9 @@ pub fn run(args: Args) -> Result<()> {
                 .unwrap_or(0.0)
         );
     }
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     if args.json {
         println!(
             "{}",
@@ -110,10 +124,14 @@ pub fn run(args: Args) -> Result<()> {
         );
     } else {
         println!(
-            "{}: {n}x{n}x{n} voxels, {} particles from {} profiles (volume fraction {:.3}, block {:.3}, overlap {:.2}%), in {:.2} s",
+            "{}: {n}x{n}x{n} voxels, {} particles from {} profiles ({} cut by the frame; particles \
+             the {} class, by {}), volume fraction {:.3} (Delesse; the block's {:.3}), overlap {:.2}%, in {:.2} s",
             args.output.display(),
             report.particles,
             report.profiles,
+            report.cut_profiles,
+            stereology::split::hex(report.split.particle),
+            report.split.decided_by,
             report.volume_fraction,
             report.block_volume_fraction,
             100.0 * report.overlap_fraction,

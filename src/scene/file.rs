@@ -206,6 +206,15 @@ pub struct Interior {
     /// the scene file (none: the tissue's colour texture).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub photographs: Vec<PathBuf>,
+    /// Which colour class of the photographs is the particles for
+    /// `method = "stereology"`: "auto" (the binder is the connected
+    /// phase, else the minority by area), "light", "dark" or a colour
+    /// "RRGGBB" (`organtex stereology --help`).
+    #[serde(
+        default,
+        skip_serializing_if = "crate::solid::stereology::Particles::is_auto"
+    )]
+    pub particles: crate::solid::stereology::Particles,
     /// Also fill the node's inside with tetrahedra (isosurface stuffing at
     /// the default resolution), written as interior/NODE.vtk for the
     /// simulator's physics and for lapped solid textures.

@@ -144,6 +144,7 @@ impl InteriorMethod {
 pub fn interior_block(
     texture: &Path,
     photographs: &[PathBuf],
+    particles: super::stereology::Particles,
     size: usize,
     method: InteriorMethod,
     seed: u64,
@@ -183,7 +184,7 @@ pub fn interior_block(
         } else {
             photographs.to_vec()
         };
-        let sections = super::stereology::read_sections(&paths, None, seed)?;
+        let sections = super::stereology::read_sections(&paths, None, particles, seed)?;
         let opts = super::stereology::StereologyOptions {
             size,
             seed,

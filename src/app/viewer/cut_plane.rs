@@ -169,16 +169,22 @@ impl Viewer {
             return;
         }
         let interior = doc.spec.nodes.iter().find_map(|n| {
-            n.interior
-                .as_ref()
-                .map(|i| (i.texture.clone(), i.method, i.photographs.clone()))
+            n.interior.as_ref().map(|i| {
+                (
+                    i.texture.clone(),
+                    i.method,
+                    i.photographs.clone(),
+                    i.particles,
+                )
+            })
         });
-        let Some((tissue, method, photographs)) = interior.or_else(|| {
+        let Some((tissue, method, photographs, particles)) = interior.or_else(|| {
             self.selected.map(|f| {
                 (
                     doc.settings(f).texture.clone(),
                     InteriorMethod::default(),
                     Vec::new(),
+                    Default::default(),
                 )
             })
         }) else {
@@ -217,6 +223,7 @@ impl Viewer {
                 let block = interior_block(
                     &db.output_path(&tissue, method.output()),
                     &photographs,
+                    particles,
                     size,
                     method,
                     0,

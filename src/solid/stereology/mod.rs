@@ -19,6 +19,7 @@ pub mod profiles;
 pub mod residual;
 pub mod shape;
 pub mod slices;
+pub mod split;
 pub mod unfold;
 pub mod watershed;
 
@@ -27,6 +28,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 pub use profiles::{Profile, Section};
+pub use split::{Particles, Split};
 pub use unfold::Distribution;
 
 use crate::error::{Error, Result};
@@ -80,6 +82,17 @@ pub enum Detail {
 /// high-contrast particles by a sixth of their area and bridged touching
 /// ones).
 const GUIDE_WEIGHT: f64 = 40.0;
+
+/// The detail copies from a window of the largest photograph this many
+/// block sides across (`detail_window`), and iterates FNPTS this many
+/// times per level. Measured on the ihc photograph at 128^3 (issue 38,
+/// `compare_block.py`'s slice figures, mean over x, y, z): the whole
+/// photograph and 3 iterations, coherence 17.8, completeness 17.7, 80.6 s;
+/// a 2x window and 1 iteration, 17.9 and 16.3 (lower is better), 12.6 s.
+/// The guide already fixes where particles are; more iterations mostly
+/// polish what one pass copied.
+const DETAIL_WINDOW: usize = 2;
+const DETAIL_ITERATIONS: usize = 1;
 
 impl std::str::FromStr for Detail {
     type Err = String;
@@ -154,11 +167,24 @@ pub struct Report {
     /// Seed 001's own solve (eq. 4, negatives clamped) on the same
     /// profiles and bins, for comparison.
     pub seed001: Distribution,
-    /// Of the photographs' usable area, the particles' (Delesse: the
-    /// volume fraction), and of the block, the particles' voxels.
+    /// The volume fraction, Delesse's estimate: of the photographs'
+    /// usable area, the particles' (every particle-class region of
+    /// `MIN_AREA` pixels or more, cut by the border or not, with the
+    /// binder it encloses). The block's own, its particle voxels over all,
+    /// is `block_volume_fraction`.
     pub volume_fraction: f64,
     pub block_volume_fraction: f64,
+    /// How the photographs were split into particles and binder.
+    pub split: Split,
+    /// Profiles measured (wholly inside the frame), profiles cut by the
+    /// border or mask and left out, and specks (particle-class regions
+    /// under `MIN_AREA` pixels) given to the binder, over all
+    /// photographs.
     pub profiles: usize,
+    pub cut_profiles: usize,
+    pub specks: usize,
+    /// What looks wrong in the measurement (also printed by the CLI).
+    pub warnings: Vec<String>,
     pub particles: usize,
     pub overlap_fraction: f64,
     /// The particles' colour categories (one unless asked for more).
@@ -169,18 +195,23 @@ pub struct Report {
 }
 
 /// The sections that photographs show (PNG or JPEG, the same pixel
-/// scale), `mask` (black where there is no tissue) applying to each.
+/// scale), `mask` (black where there is no tissue) applying to each, all
+/// split into particles and binder alike (`split`), the particle class as
+/// `particles` asks.
 pub fn read_sections(
     photographs: &[std::path::PathBuf],
     mask: Option<&std::path::Path>,
+    particles: Particles,
     seed: u64,
 ) -> Result<Vec<Section>> {
     use crate::synth::exemplar::read_image;
     let mask = mask
         .map(|m| read_image(m).map(|i| (m, i.to_luma8())))
         .transpose()?;
-    photographs
-        .iter()
+    // Per photograph: width, height, pixels, usable pixels.
+    type Read = (usize, usize, Vec<[u8; 3]>, Vec<bool>);
+    let read: Vec<Read> = photographs
+        .par_iter()
         .map(|path| {
             let img = read_image(path)?.to_rgb8();
             let (w, h) = (img.width() as usize, img.height() as usize);
@@ -198,8 +229,32 @@ pub fn read_sections(
                 None => vec![true; w * h],
             };
             let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
-            profiles::find(w, h, &pixels, &valid, seed).map_err(|e| e.in_file(path))
+            Ok((w, h, pixels, valid))
         })
+        .collect::<Result<_>>()?;
+    let photos: Vec<split::Photo> = read
+        .iter()
+        .map(|(width, height, pixels, valid)| split::Photo {
+            width: *width,
+            height: *height,
+            pixels,
+            valid,
+        })
+        .collect();
+    // The split is of all photographs together: name them.
+    let in_files = |e: Error| match e {
+        Error::Invalid { path: None, msg } if photographs.len() > 1 => Error::invalid(format!(
+            "{} and {} other photographs: {msg}",
+            photographs[0].display(),
+            photographs.len() - 1
+        )),
+        e => e.in_file(&photographs[0]),
+    };
+    let split = split::split(&photos, particles, seed).map_err(in_files)?;
+    photos
+        .par_iter()
+        .zip(photographs)
+        .map(|(&photo, path)| profiles::find_with(photo, &split).map_err(|e| e.in_file(path)))
         .collect()
 }
 
@@ -410,8 +465,9 @@ pub fn synthesize(
         }
         Detail::Residual => {
             // Sec. 4.3: the residual, in 3D, added to the mean colours.
-            let detail = residual::synthesize(&largest.residual, n, opts.seed);
-            let gain = largest.residual.gain;
+            let residual = largest.residual();
+            let detail = residual::synthesize(&residual, n, opts.seed);
+            let gain = residual.gain;
             volume
                 .voxels
                 .par_iter_mut()
@@ -424,8 +480,12 @@ pub fn synthesize(
         }
     }
     let detail_s = start.elapsed().as_secs_f64();
-    let slices = slices::check(&volume, sections, opts.bins, opts.seed);
+    let slices = slices::check(&volume, sections, opts.bins);
     progress.advance(1);
+    let cut: usize = sections.iter().map(|s| s.cut).sum();
+    let specks: usize = sections.iter().map(|s| s.specks).sum();
+    let split = sections[0].split.clone();
+    let warnings = warnings(&split, profiles.len(), cut, specks);
     Ok((
         volume,
         Report {
@@ -433,7 +493,11 @@ pub fn synthesize(
             seed001,
             volume_fraction: fraction,
             block_volume_fraction: inside as f64 / (n * n * n) as f64,
+            split,
             profiles: profiles.len(),
+            cut_profiles: cut,
+            specks,
+            warnings,
             particles: particles.len(),
             overlap_fraction: overlap,
             colour_classes,
@@ -448,6 +512,46 @@ pub fn synthesize(
     ))
 }
 
+/// Specks per profile past which the particle class is suspect.
+const SPECKS_PER_PROFILE: usize = 4;
+
+/// What looks wrong in a measurement of `profiles` profiles, `cut` more
+/// cut by the frame and `specks` noise regions (issue 38: a flipped class
+/// gave 68,000 "profiles" and no word).
+fn warnings(split: &Split, profiles: usize, cut: usize, specks: usize) -> Vec<String> {
+    let mut out = Vec::new();
+    if 2 * cut > profiles + cut {
+        out.push(format!(
+            "most particle profiles ({cut} of {}) touch the border or the mask and were left out: \
+             the particles are large for these photographs, and the sizes rest on the {profiles} others",
+            profiles + cut
+        ));
+    }
+    // Specks are dropped as noise; a few per profile is noise on a
+    // border, many more a class that is not particles.
+    if specks > SPECKS_PER_PROFILE * profiles {
+        out.push(format!(
+            "{specks} specks under {} pixels against {profiles} profiles in the particle class: \
+             the photographs are very noisy or the particles are the other class (--particles)",
+            profiles::MIN_AREA
+        ));
+    }
+    // After 3x3 means the noise is a third.
+    let noise = split.noise / if split.smoothed { 3.0 } else { 1.0 };
+    let apart = (0..3)
+        .map(|k| (split.particle[k] - split.binder[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if apart < 3.0 * noise {
+        out.push(format!(
+            "particles and binder differ little in colour against the pixels' noise ({apart:.0} levels \
+             apart, noise {noise:.0}{}): profiles may be merged or broken",
+            if split.smoothed { " after 3x3 means" } else { "" }
+        ));
+    }
+    out
+}
+
 /// The block synthesiser's copy of `section`'s pixels (of classes
 /// `pixel_classes`) into the particles and binder laid out by `classes`
 /// (0 binder, 1 + a particle's colour category).
@@ -457,21 +561,22 @@ fn copied(
     classes: Vec<u8>,
     opts: &StereologyOptions,
 ) -> Result<Volume> {
+    let window = detail_window(section, pixel_classes, opts.size);
     let exemplar = crate::synth::exemplar::Exemplar::new(
-        section.width,
-        section.height,
-        section.pixels.clone(),
-        section.valid.clone(),
+        window.width,
+        window.height,
+        window.pixels,
+        window.valid,
     )?;
     // Binder against particles: their mean colours' difference, per
     // channel.
     let mut sum = [[0f64; 3]; 2];
     let mut count = [0f64; 2];
-    for ((p, &c), &v) in section
+    for ((p, &c), &v) in exemplar
         .pixels
         .iter()
-        .zip(&pixel_classes)
-        .zip(&section.valid)
+        .zip(&window.classes)
+        .zip(&exemplar.valid)
     {
         if v {
             let c = (c != 0) as usize;
@@ -486,12 +591,12 @@ fn copied(
         .sum::<f64>()
         / 3.0;
     let guide = crate::synth::block::Guide {
-        exemplar: pixel_classes,
+        exemplar: window.classes,
         block: classes,
         weight: contrast.max(GUIDE_WEIGHT),
     };
     // As many pyramid levels as the size halves into, down to 16 a side.
-    let (n, side) = (opts.size, section.width.min(section.height));
+    let (n, side) = (opts.size, window.width.min(window.height));
     let mut levels = 1;
     while n.is_multiple_of(1 << levels) && (n >> levels) >= 16 && (side >> levels) >= 16 {
         levels += 1;
@@ -500,9 +605,60 @@ fn copied(
         size: n,
         seed: opts.seed,
         levels: Some(levels),
+        iterations: DETAIL_ITERATIONS,
         ..Default::default()
     };
     crate::synth::block::synthesize_guided(&exemplar, &guide, &block_opts, &crate::progress::Silent)
+}
+
+/// The pixels the detail copies from, and their classes.
+struct Window {
+    width: usize,
+    height: usize,
+    pixels: Vec<[u8; 3]>,
+    valid: Vec<bool>,
+    classes: Vec<u8>,
+}
+
+/// The part of `section` (with its pixels' `classes`) the detail copies
+/// from: a window `DETAIL_WINDOW` times the block's side (at least 256
+/// pixels), of nine placed on a 3x3 grid the one where the particles'
+/// share of the pixels is nearest the photograph's. The block
+/// synthesiser's time grows with its exemplar (issue 38: 96 s for 128^3
+/// from a 2048x2048 photograph, 1.8x a 512 crop's), and a window wider
+/// than the block's slices holds the neighbourhoods they can show.
+fn detail_window(section: &Section, classes: Vec<u8>, n: usize) -> Window {
+    let side = (DETAIL_WINDOW * n).max(256);
+    let (w, h) = (section.width.min(side), section.height.min(side));
+    let share = |x0: usize, y0: usize, w: usize, h: usize| {
+        let (mut particles, mut usable) = (0usize, 0usize);
+        for y in y0..y0 + h {
+            let row = y * section.width + x0..y * section.width + x0 + w;
+            for (&v, &c) in section.valid[row.clone()].iter().zip(&classes[row]) {
+                usable += v as usize;
+                particles += (v && c != 0) as usize;
+            }
+        }
+        particles as f64 / usable.max(1) as f64
+    };
+    let all = share(0, 0, section.width, section.height);
+    let at = |k: usize, free: usize| k * free / 2;
+    let (x0, y0) = (0..9)
+        .map(|k| (at(k % 3, section.width - w), at(k / 3, section.height - h)))
+        .min_by(|&a, &b| {
+            (share(a.0, a.1, w, h) - all)
+                .abs()
+                .total_cmp(&(share(b.0, b.1, w, h) - all).abs())
+        })
+        .expect("nine windows");
+    let at = |i: usize| (y0 + i / w) * section.width + x0 + i % w;
+    Window {
+        width: w,
+        height: h,
+        pixels: (0..w * h).map(|i| section.pixels[at(i)]).collect(),
+        valid: (0..w * h).map(|i| section.valid[at(i)]).collect(),
+        classes: (0..w * h).map(|i| classes[at(i)]).collect(),
+    }
 }
 
 /// The voxels: each inside a particle its colour (the later of two

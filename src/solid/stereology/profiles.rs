@@ -1,17 +1,18 @@
 //! Particle profiles in a photograph of a section (seed 001, sec. 3-4):
-//! pixels split into two colour classes by k-means, the minority class
-//! taken as particles (the binder is the continuous phase), its
-//! 4-connected components the profiles, with the binder regions each one
-//! encloses (a gland's lumen inside its epithelium) filled in, and those
-//! of touching particles split at their necks (`watershed`). A profile touching the image's
+//! pixels classed as particles or binder by the photographs' `split`,
+//! the particle class's 4-connected components the profiles (specks under
+//! `MIN_AREA` pixels are noise, given to the binder), with the binder
+//! regions each one encloses (a gland's lumen inside its epithelium, or
+//! noise) filled in, and those of touching particles split at their
+//! necks (`watershed`). A profile touching the image's
 //! border or the mask is cut by the frame, so it is left out and the
 //! others weighted for it (Miles-Lantuejoul: a profile of bounding box
 //! w x h is wholly seen only when its box falls inside the frame, a chance
 //! of (W - w)(H - h) / WH).
 
+use super::split::{self, Particles, Photo, Split};
 use super::watershed::four_neighbours;
 use crate::error::{Error, Result};
-use crate::rng;
 
 /// Profiles smaller than this many pixels are noise, not particles.
 pub const MIN_AREA: usize = 9;
@@ -37,6 +38,9 @@ pub struct Section {
     pub profiles: Vec<Profile>,
     /// Profiles left out for touching the border or the mask.
     pub cut: usize,
+    /// Particle-class regions under `MIN_AREA` pixels, given to the
+    /// binder as noise.
+    pub specks: usize,
     /// Usable (unmasked) pixels.
     pub area: f64,
     /// Particle pixels over usable pixels: the volume fraction (Delesse).
@@ -44,15 +48,36 @@ pub struct Section {
     pub binder_colour: [f64; 3],
     /// Per pixel: 0 binder or masked, k + 1 profile k, u32::MAX a cut one.
     pub labels: Vec<u32>,
-    /// The photograph less its profiles' and binder's mean colours (seed
-    /// 001, 4.3), for the fine detail.
-    pub residual: super::residual::Residual2d,
     /// The photograph and its usable pixels, for the block synthesiser.
     pub pixels: Vec<[u8; 3]>,
     pub valid: Vec<bool>,
+    /// The particle and binder classes it was measured by (the same for
+    /// every photograph of a study, and for the block's slices).
+    pub split: Split,
 }
 
-/// Find the profiles of `pixels` (row by row), `valid` the usable ones.
+impl Section {
+    /// The photograph less its profiles' and binder's mean colours (seed
+    /// 001, 4.3), for the fine detail.
+    pub fn residual(&self) -> super::residual::Residual2d {
+        let means: Vec<Option<[f64; 3]>> = (0..self.pixels.len())
+            .map(|i| match self.labels[i] {
+                _ if !self.valid[i] => None,
+                0 => Some(self.binder_colour),
+                u32::MAX => None,
+                k => Some(self.profiles[k as usize - 1].colour),
+            })
+            .collect();
+        super::residual::Residual2d::new(
+            self.width,
+            self.height,
+            &super::residual::residual(&self.pixels, &means),
+        )
+    }
+}
+
+/// Find the profiles of `pixels` (row by row), `valid` the usable ones,
+/// split into particles and binder on their own.
 pub fn find(
     width: usize,
     height: usize,
@@ -60,20 +85,51 @@ pub fn find(
     valid: &[bool],
     seed: u64,
 ) -> Result<Section> {
+    let photo = Photo {
+        width,
+        height,
+        pixels,
+        valid,
+    };
+    let split = split::split(&[photo], Particles::Auto, seed)?;
+    find_with(photo, &split)
+}
+
+/// Find the profiles of `photo`, classed by `split`.
+pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
+    let Photo {
+        width,
+        height,
+        pixels,
+        valid,
+    } = photo;
     let usable: Vec<usize> = (0..pixels.len()).filter(|&i| valid[i]).collect();
     if usable.len() < 16 {
         return Err(Error::invalid("the section has almost no usable pixels"));
     }
-    let particle = two_classes(pixels, &usable, seed);
+    let mut particle = split.classify(photo);
     if !usable.iter().any(|&i| particle[i]) {
         return Err(Error::invalid(
             "no particles found: the section is one colour",
         ));
     }
-    // Particle components, then binder components: a binder region that
-    // one particle component encloses (a gland's lumen inside its
+    // Particle components, specks among them (under MIN_AREA pixels:
+    // noise) given to the binder; then binder components: a binder region
+    // that one particle component encloses (a gland's lumen inside its
     // epithelium) is part of that particle.
     let (mut comp, _) = components(width, height, valid, &|i| particle[i]);
+    let mut sizes = vec![0usize; comp.iter().copied().max().unwrap_or(0) as usize];
+    for &c in &comp {
+        if c != 0 {
+            sizes[c as usize - 1] += 1;
+        }
+    }
+    let specks = sizes.iter().filter(|&&n| n < MIN_AREA).count();
+    for (p, c) in particle.iter_mut().zip(&mut comp) {
+        if *c != 0 && sizes[*c as usize - 1] < MIN_AREA {
+            (*p, *c) = (false, 0);
+        }
+    }
     let (binder, binder_touches) = components(width, height, valid, &|i| !particle[i]);
     let mut enclosing = vec![None; binder_touches.len()];
     let mut shared = vec![false; binder_touches.len()];
@@ -175,28 +231,19 @@ pub fn find(
         }
     }
     let binder_colour = binder.map(|b| b / n_binder.max(1) as f64);
-    let means: Vec<Option<[f64; 3]>> = (0..pixels.len())
-        .map(|i| match labels[i] {
-            _ if !valid[i] => None,
-            0 => Some(binder_colour),
-            u32::MAX => None,
-            k => Some(profiles[k as usize - 1].colour),
-        })
-        .collect();
-    let residual =
-        super::residual::Residual2d::new(width, height, &super::residual::residual(pixels, &means));
     Ok(Section {
         width,
         height,
-        residual,
         profiles,
         cut,
+        specks,
         area: usable.len() as f64,
         area_fraction: n_particle as f64 / usable.len() as f64,
         binder_colour,
         labels,
         pixels: pixels.to_vec(),
         valid: valid.to_vec(),
+        split: split.clone(),
     })
 }
 
@@ -237,58 +284,4 @@ fn components(
         touches.push(touch);
     }
     (label, touches)
-}
-
-/// k-means with two centres on the usable pixels' colours; true for the
-/// pixels of the smaller class.
-fn two_classes(pixels: &[[u8; 3]], usable: &[usize], seed: u64) -> Vec<bool> {
-    let col = |i: usize| pixels[i].map(|c| c as f64);
-    let dist = |a: [f64; 3], b: [f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
-    // Start from the darkest and the lightest of a sample (deterministic).
-    let lum = |c: [f64; 3]| c[0] + c[1] + c[2];
-    let sample: Vec<usize> = (0..usable.len().min(4096))
-        .map(|k| usable[rng::below(seed, &[k as u64], usable.len())])
-        .collect();
-    let mut centres = [
-        col(*sample
-            .iter()
-            .min_by(|&&a, &&b| lum(col(a)).total_cmp(&lum(col(b))))
-            .expect("a sample")),
-        col(*sample
-            .iter()
-            .max_by(|&&a, &&b| lum(col(a)).total_cmp(&lum(col(b))))
-            .expect("a sample")),
-    ];
-    let mut class = vec![false; pixels.len()];
-    for _ in 0..20 {
-        let mut sum = [[0f64; 3]; 2];
-        let mut count = [0usize; 2];
-        for &i in usable {
-            let c = col(i);
-            let k = (dist(c, centres[1]) < dist(c, centres[0])) as usize;
-            class[i] = k == 1;
-            count[k] += 1;
-            for a in 0..3 {
-                sum[k][a] += c[a];
-            }
-        }
-        let next = [0, 1].map(|k| {
-            if count[k] == 0 {
-                centres[k]
-            } else {
-                sum[k].map(|s| s / count[k] as f64)
-            }
-        });
-        if next == centres {
-            break;
-        }
-        centres = next;
-    }
-    let ones = usable.iter().filter(|&&i| class[i]).count();
-    let minority_is_one = 2 * ones <= usable.len();
-    let mut out = vec![false; pixels.len()];
-    for &i in usable {
-        out[i] = class[i] == minority_is_one;
-    }
-    out
 }

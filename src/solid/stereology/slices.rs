@@ -4,6 +4,7 @@
 //! the photographs).
 
 use super::profiles::{self, Section};
+use super::split::Photo;
 use super::unfold::total_variation;
 use crate::synth::volume::Volume;
 
@@ -29,8 +30,8 @@ pub struct SliceCheck {
 }
 
 /// Every `STEP`-th slice across each axis of `block`, its profiles found
-/// as the photographs' were.
-pub fn check(block: &Volume, sections: &[Section], bins: usize, seed: u64) -> SliceCheck {
+/// as the photographs' were (by their split).
+pub fn check(block: &Volume, sections: &[Section], bins: usize) -> SliceCheck {
     let reference: Vec<(f64, f64)> = sections
         .iter()
         .flat_map(|s| s.profiles.iter().map(|p| (p.diameter, p.weight)))
@@ -46,7 +47,13 @@ pub fn check(block: &Volume, sections: &[Section], bins: usize, seed: u64) -> Sl
         for k in 0..slices {
             let (w, h, pixels) = block.slice(axis, k * STEP);
             // A slice with no particle is a finding, not an error.
-            let Ok(s) = profiles::find(w, h, &pixels, &vec![true; w * h], seed) else {
+            let photo = Photo {
+                width: w,
+                height: h,
+                pixels: &pixels,
+                valid: &vec![true; w * h],
+            };
+            let Ok(s) = profiles::find_with(photo, &sections[0].split) else {
                 continue;
             };
             area += s.profiles.iter().map(|p| p.area).sum::<f64>();

@@ -639,18 +639,22 @@ fn detail_window(section: &Section, classes: Vec<u8>, n: usize) -> Window {
                 particles += (v && c != 0) as usize;
             }
         }
-        particles as f64 / usable.max(1) as f64
+        (particles as f64 / usable.max(1) as f64, usable)
     };
-    let all = share(0, 0, section.width, section.height);
+    let all = share(0, 0, section.width, section.height).0;
     let at = |k: usize, free: usize| k * free / 2;
-    let (x0, y0) = (0..9)
+    let windows: Vec<((usize, usize), (f64, usize))> = (0..9)
         .map(|k| (at(k % 3, section.width - w), at(k / 3, section.height - h)))
-        .min_by(|&a, &b| {
-            (share(a.0, a.1, w, h) - all)
-                .abs()
-                .total_cmp(&(share(b.0, b.1, w, h) - all).abs())
-        })
-        .expect("nine windows");
+        .map(|(x, y)| ((x, y), share(x, y, w, h)))
+        .collect();
+    // Of the windows at least half as usable as the most usable one.
+    let most = windows.iter().map(|w| w.1.1).max().unwrap_or(0);
+    let (x0, y0) = windows
+        .iter()
+        .filter(|w| 2 * w.1.1 >= most)
+        .min_by(|a, b| (a.1.0 - all).abs().total_cmp(&(b.1.0 - all).abs()))
+        .expect("the most usable window")
+        .0;
     let at = |i: usize| (y0 + i / w) * section.width + x0 + i % w;
     Window {
         width: w,

@@ -110,7 +110,7 @@ pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
     let mut particle = split.classify(photo);
     if !usable.iter().any(|&i| particle[i]) {
         return Err(Error::invalid(
-            "no particles found: the section is one colour",
+            "no particles found: the split of all the photographs leaves this one all binder",
         ));
     }
     // Particle components, specks among them (under MIN_AREA pixels:

@@ -16,8 +16,8 @@
 //!   pixels are classed on their 3x3 mean, which cuts the noise
 //!   threefold; pixels go to the nearer class mean, the midpoint between
 //!   them, so a blurred straight border stays where it was;
-//! - which class is the particles is decided by connectivity across all
-//!   photographs (the binder is the continuous phase: its largest region
+//! - which class is the particles is decided by connectivity across up
+//!   to `STATISTICS_PHOTOS` photographs, evenly spaced (the binder is the continuous phase: its largest region
 //!   holds most of it, the particles' largest one little), else by area
 //!   (the minority), else the user is asked (`Particles`).
 
@@ -120,11 +120,13 @@ pub struct Photo<'a> {
 /// The split every photograph (and the block's slices) is classed by.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Split {
-    /// Mean colours of the particle and binder classes (of the pixels as
-    /// classed: 3x3 means where `smoothed`).
+    /// Mean colours of the particle and binder classes: of their interior
+    /// pixels (all 3x3 neighbours of the class; 3x3 means where
+    /// `smoothed`), the threshold's class means where a class has none.
     pub particle: [f64; 3],
     pub binder: [f64; 3],
-    /// Distance between the class means over their spread, per pixel.
+    /// Distance between the threshold's class means over their spread,
+    /// per pixel (before the interior means).
     pub separation: f64,
     /// Pixel noise along the axis between the class means (grey levels;
     /// from the differences of neighbouring pixels, median based).
@@ -135,9 +137,11 @@ pub struct Split {
     /// or the user's "light", "dark", "colour".
     pub decided_by: &'static str,
     /// Of each class's pixels, the share in its largest 4-connected
-    /// region per photograph (summed over them): the binder's near 1.
+    /// region per photograph (summed over the statistics photographs):
+    /// the binder's near 1.
     pub largest_region_share: ParticleBinder,
-    /// The particle class's share of the usable pixels.
+    /// The particle class's share of the statistics photographs' usable
+    /// pixels, by the threshold's means and before specks are dropped.
     pub particle_share: f64,
 }
 
@@ -188,9 +192,8 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
             .par_iter()
             .zip(&positions)
             .flat_map_iter(|(photo, at)| {
-                let c = colours(*photo, smoothed);
                 at.iter()
-                    .map(|&i| c[i].map(|x| x as f64))
+                    .map(|&i| colour_at(*photo, smoothed, i).map(|x| x as f64))
                     .collect::<Vec<_>>()
             })
             .collect()
@@ -227,6 +230,8 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
     // blurred border, which pulls the small class's mean toward the large
     // one's and the midpoint with it (+3% of area on issue 38's noisy
     // sections).
+    // Measured in parallel, summed in order: the same bytes on any number
+    // of threads.
     let counts = photos
         .par_iter()
         .step_by(photos.len().div_ceil(STATISTICS_PHOTOS))
@@ -260,7 +265,9 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
             }
             out
         })
-        .reduce(ClassCounts::default, ClassCounts::add);
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold(ClassCounts::default(), ClassCounts::add);
     for ((mean, colour), &n) in means.iter_mut().zip(&counts.colour).zip(&counts.interior) {
         if n > 0.0 {
             *mean = colour.map(|s| s / n);
@@ -290,9 +297,10 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
             };
             Err(Error::invalid(format!(
                 "cannot tell the particles from the binder: the {} class (mean colour {}) and the {} \
-                 class ({}) cover {:.0}% and {:.0}% of the sections, and their largest regions hold \
-                 {:.0}% and {:.0}% of each (the binder is usually the one connected phase); \
-                 give --particles light, dark or a colour RRGGBB",
+                 class ({}) cover {:.0}% and {:.0}% of the photographs measured, and their largest \
+                 regions hold {:.0}% and {:.0}% of each (the binder is usually the one connected \
+                 phase); give --particles light, dark or a colour RRGGBB (in a scene, particles = \
+                 \"light\" in [node.interior])",
                 names[0],
                 hex(means[0]),
                 names[1],
@@ -376,7 +384,9 @@ fn pixel_noise(photos: &[Photo], positions: &[Vec<usize>], means: [[f64; 3]; 2])
 }
 
 fn one_colour() -> Error {
-    Error::invalid("no particles found: the sections are one colour")
+    Error::invalid(
+        "no particles found: the sections are one colour, or one colour class is under 0.2% of them",
+    )
 }
 
 /// A colour as RRGGBB.
@@ -393,26 +403,33 @@ fn colours(photo: Photo, smoothed: bool) -> Vec<[f32; 3]> {
     if !smoothed {
         return photo.pixels.iter().map(|&p| as_f32(p)).collect();
     }
-    let (w, h) = (photo.width, photo.height);
-    (0..w * h)
+    (0..photo.width * photo.height)
         .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let (mut sum, mut n) = ([0f32; 3], 0f32);
-            for yy in y.saturating_sub(1)..(y + 2).min(h) {
-                for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                    let j = yy * w + xx;
-                    if photo.valid[j] {
-                        for (s, &x) in sum.iter_mut().zip(&photo.pixels[j]) {
-                            *s += x as f32;
-                        }
-                        n += 1.0;
-                    }
-                }
-            }
-            sum.map(|s| s / n.max(1.0))
-        })
+        .map(|i| colour_at(photo, true, i))
         .collect()
+}
+
+/// Pixel `i`'s colour, or with `smoothed` its mean over its usable 3x3
+/// neighbours.
+fn colour_at(photo: Photo, smoothed: bool, i: usize) -> [f32; 3] {
+    if !smoothed {
+        return photo.pixels[i].map(|c| c as f32);
+    }
+    let (w, h) = (photo.width, photo.height);
+    let (x, y) = (i % w, i / w);
+    let (mut sum, mut n) = ([0f32; 3], 0f32);
+    for yy in y.saturating_sub(1)..(y + 2).min(h) {
+        for xx in x.saturating_sub(1)..(x + 2).min(w) {
+            let j = yy * w + xx;
+            if photo.valid[j] {
+                for (s, &x) in sum.iter_mut().zip(&photo.pixels[j]) {
+                    *s += x as f32;
+                }
+                n += 1.0;
+            }
+        }
+    }
+    sum.map(|s| s / n.max(1.0))
 }
 
 /// The two classes' means of `sample`, and their separation (distance
@@ -497,7 +514,8 @@ fn minimum_error(hist: &[f64]) -> Option<usize> {
 }
 
 /// The direction of largest spread of `sample` (power iteration on the
-/// covariance from the grey axis; deterministic).
+/// covariance from its longest row, which no axis of spread is
+/// orthogonal to, unlike a fixed start such as grey; deterministic).
 fn principal_axis(sample: &[[f64; 3]]) -> Option<[f64; 3]> {
     let n = sample.len() as f64;
     let mean = [0, 1, 2].map(|k| sample.iter().map(|c| c[k]).sum::<f64>() / n);
@@ -510,7 +528,10 @@ fn principal_axis(sample: &[[f64; 3]]) -> Option<[f64; 3]> {
             }
         }
     }
-    let mut v = [1f64, 1.0, 1.0].map(|x| x / 3f64.sqrt());
+    let mut v = *cov
+        .iter()
+        .max_by(|a, b| dot(**a, **a).total_cmp(&dot(**b, **b)))
+        .expect("three rows");
     for _ in 0..50 {
         let next = [0, 1, 2].map(|i| dot(cov[i], v));
         let length = dot(next, next).sqrt();
@@ -630,6 +651,32 @@ mod tests {
     }
 
     #[test]
+    fn classes_of_equal_luminance_split() {
+        // Red discs on green: no spread along grey at all.
+        let side = 64;
+        let pixels: Vec<[u8; 3]> = (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f64, (i / side) as f64);
+                if (x % 16.0 - 8.0).powi(2) + (y % 16.0 - 8.0).powi(2) < 16.0 {
+                    [200, 100, 100]
+                } else {
+                    [100, 200, 100]
+                }
+            })
+            .collect();
+        let valid = vec![true; side * side];
+        let photo = Photo {
+            width: side,
+            height: side,
+            pixels: &pixels,
+            valid: &valid,
+        };
+        let s = split(&[photo], Particles::Auto, 0).expect("a split");
+        assert_eq!(s.particle.map(|c| c.round()), [200.0, 100.0, 100.0]);
+        assert_eq!(s.decided_by, "connectivity");
+    }
+
+    #[test]
     fn particles_parse() {
         assert_eq!("light".parse::<Particles>(), Ok(Particles::Light));
         assert_eq!(
@@ -637,5 +684,14 @@ mod tests {
             Ok(Particles::Colour([255, 128, 0]))
         );
         assert!("pink".parse::<Particles>().is_err());
+        // As a scene stores it and reads it back.
+        for p in [
+            Particles::Auto,
+            Particles::Dark,
+            Particles::Colour([255, 128, 0]),
+        ] {
+            let text = serde_json::to_string(&p).expect("serialises");
+            assert_eq!(serde_json::from_str::<Particles>(&text).expect("parses"), p);
+        }
     }
 }

@@ -381,18 +381,9 @@ fn pyramid(
                 })
                 .collect();
             let buckets = ex.iter().map(ColourBuckets::new).collect();
-            let (w, h, r) = (ex[0].width, ex[0].height, k / 2);
-            let interior = (0..w * h)
-                .map(|i| {
-                    let (x, y) = (i % w, i / w);
-                    x >= r
-                        && y >= r
-                        && x + r < w
-                        && y + r < h
-                        && (y - r..=y + r)
-                            .all(|yy| valid[yy * w + x - r..=yy * w + x + r].iter().all(|&v| v))
-                })
-                .collect();
+            let (w, r) = (ex[0].width, k / 2);
+            // ex[0] carries the validity shared by all exemplars.
+            let interior = ex[0].whole_windows(r);
             let offsets = window(r as i32)
                 .iter()
                 .map(|&(du, dv)| dv as isize * w as isize + du as isize)
@@ -521,11 +512,7 @@ fn plane_cost(
         // The same sum in the same order, every pixel there.
         for (&o, &(b, n)) in src.offsets.iter().zip(block) {
             if n != 0 {
-                let a = e.pixels[(centre as isize + o) as usize];
-                let d = (a[0] as i64 - b[0] as i64).abs()
-                    + (a[1] as i64 - b[1] as i64).abs()
-                    + (a[2] as i64 - b[2] as i64).abs();
-                cost += d * n;
+                cost += pixel_cost(e.pixels[(centre as isize + o) as usize], b) * n;
             }
             if cost >= limit {
                 break;
@@ -537,19 +524,21 @@ fn plane_cost(
         match src.usable(sx + du, sy + dv) {
             None => cost += missing,
             Some(_) if n == 0 => {}
-            Some(s) => {
-                let a = e.pixels[s as usize];
-                let d = (a[0] as i64 - b[0] as i64).abs()
-                    + (a[1] as i64 - b[1] as i64).abs()
-                    + (a[2] as i64 - b[2] as i64).abs();
-                cost += d * n;
-            }
+            Some(s) => cost += pixel_cost(e.pixels[s as usize], b) * n,
         }
         if cost >= limit {
             break;
         }
     }
     cost
+}
+
+/// |a - b| summed over the channels.
+#[inline]
+fn pixel_cost(a: [u8; 3], b: [u8; 3]) -> i64 {
+    (a[0] as i64 - b[0] as i64).abs()
+        + (a[1] as i64 - b[1] as i64).abs()
+        + (a[2] as i64 - b[2] as i64).abs()
 }
 
 /// Offer coordinate (sx, sy) if usable and new.

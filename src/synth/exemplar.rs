@@ -31,6 +31,27 @@ pub struct Exemplar {
 }
 
 impl Exemplar {
+    /// Per pixel, whether the window of radius `r` about it lies inside
+    /// the exemplar and every pixel of it is usable: candidates there are
+    /// costed without a check per pixel.
+    pub fn whole_windows(&self, r: usize) -> Vec<bool> {
+        let (w, h) = (self.width, self.height);
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                x >= r
+                    && y >= r
+                    && x + r < w
+                    && y + r < h
+                    && (y - r..=y + r).all(|yy| {
+                        self.valid[yy * w + x - r..=yy * w + x + r]
+                            .iter()
+                            .all(|&v| v)
+                    })
+            })
+            .collect()
+    }
+
     /// An exemplar from pixels and validity, row by row from the top left.
     pub fn new(
         width: usize,

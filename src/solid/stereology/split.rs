@@ -581,7 +581,16 @@ fn region_sizes(width: usize, height: usize, inside: &dyn Fn(usize) -> bool) -> 
 mod tests {
     use super::*;
 
-    /// Light discs (8% of the area) in a dark binder of nearly the same
+    fn square<'a>(side: usize, pixels: &'a [[u8; 3]], valid: &'a [bool]) -> Photo<'a> {
+        Photo {
+            width: side,
+            height: side,
+            pixels,
+            valid,
+        }
+    }
+
+    /// Light discs (a quarter of the area) in a dark binder of nearly the same
     /// colour under strong noise: the per-photograph k-means of before
     /// split the binder and took its noise for particles.
     fn noisy(side: usize, noise: f64, seed: u64) -> Vec<[u8; 3]> {
@@ -604,12 +613,7 @@ mod tests {
         let side = 256;
         let pixels = noisy(side, 25.0, 1);
         let valid = vec![true; side * side];
-        let photo = Photo {
-            width: side,
-            height: side,
-            pixels: &pixels,
-            valid: &valid,
-        };
+        let photo = square(side, &pixels, &valid);
         let s = split(&[photo], Particles::Auto, 0).expect("a split");
         assert!(s.smoothed, "{s:?}");
         assert_eq!(s.decided_by, "connectivity");
@@ -638,12 +642,7 @@ mod tests {
             })
             .collect();
         let valid = vec![true; side * side];
-        let photo = Photo {
-            width: side,
-            height: side,
-            pixels: &pixels,
-            valid: &valid,
-        };
+        let photo = square(side, &pixels, &valid);
         let err = split(&[photo], Particles::Auto, 0).expect_err("ambiguous");
         assert!(err.to_string().contains("--particles"), "{err}");
         let light = split(&[photo], Particles::Light, 0).expect("asked");
@@ -665,12 +664,7 @@ mod tests {
             })
             .collect();
         let valid = vec![true; side * side];
-        let photo = Photo {
-            width: side,
-            height: side,
-            pixels: &pixels,
-            valid: &valid,
-        };
+        let photo = square(side, &pixels, &valid);
         let s = split(&[photo], Particles::Auto, 0).expect("a split");
         assert_eq!(s.particle.map(|c| c.round()), [200.0, 100.0, 100.0]);
         assert_eq!(s.decided_by, "connectivity");

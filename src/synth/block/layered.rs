@@ -338,23 +338,6 @@ impl<'a> Layered<'a> {
         cost
     }
 
-    /// Per exemplar pixel, whether the window of radius `r` about it lies
-    /// inside the exemplar and every pixel of it is usable.
-    fn whole_windows(&self, r: i32) -> Vec<bool> {
-        let (w, h) = (self.e.width as i32, self.e.height as i32);
-        (0..w * h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                x >= r
-                    && y >= r
-                    && x + r < w
-                    && y + r < h
-                    && (-r..=r)
-                        .all(|dv| (-r..=r).all(|du| self.e.valid[(i + dv * w + du) as usize]))
-            })
-            .collect()
-    }
-
     /// Search for voxel `v` in plane `a`: the best and second best
     /// candidate (pixel, cost).
     fn search(
@@ -425,7 +408,7 @@ impl<'a> Layered<'a> {
     /// One round: search both planes, apply the sweep fix, blend.
     fn round(&mut self, opts: &LayeredOptions, key: [u64; 2]) {
         let window = window((opts.neighbourhood / 2) as i32);
-        let whole = self.whole_windows((opts.neighbourhood / 2) as i32);
+        let whole = self.e.whole_windows(opts.neighbourhood / 2);
         let found: Vec<[[(u32, i64); 2]; 2]> = (0..self.n * self.n * self.n)
             .into_par_iter()
             .map(|v| [0, 1].map(|a| self.search(v, a, &window, &whole, opts.seed, key)))

@@ -11,7 +11,7 @@
 //! of (W - w)(H - h) / WH).
 
 use super::split::{self, Particles, Photo, Split};
-use super::watershed::four_neighbours;
+use super::watershed::{component_sizes, components, four_neighbours};
 use crate::error::{Error, Result};
 
 /// Profiles smaller than this many pixels are noise, not particles.
@@ -118,12 +118,7 @@ pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
     // that one particle component encloses (a gland's lumen inside its
     // epithelium) is part of that particle.
     let (mut comp, _) = components(width, height, valid, &|i| particle[i]);
-    let mut sizes = vec![0usize; comp.iter().copied().max().unwrap_or(0) as usize];
-    for &c in &comp {
-        if c != 0 {
-            sizes[c as usize - 1] += 1;
-        }
-    }
+    let sizes = component_sizes(&comp);
     let specks = sizes.iter().filter(|&&n| n < MIN_AREA).count();
     for (p, c) in particle.iter_mut().zip(&mut comp) {
         if *c != 0 && sizes[*c as usize - 1] < MIN_AREA {
@@ -245,43 +240,4 @@ pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
         valid: valid.to_vec(),
         split: split.clone(),
     })
-}
-
-/// 4-connected components of the usable pixels where `inside` holds:
-/// per pixel its component (1-based, 0 outside), and per component whether
-/// it touches the image's border or an unusable pixel.
-fn components(
-    width: usize,
-    height: usize,
-    valid: &[bool],
-    inside: &dyn Fn(usize) -> bool,
-) -> (Vec<u32>, Vec<bool>) {
-    let mut label = vec![0u32; valid.len()];
-    let mut touches = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..valid.len() {
-        if !valid[start] || !inside(start) || label[start] != 0 {
-            continue;
-        }
-        let id = touches.len() as u32 + 1;
-        let mut touch = false;
-        label[start] = id;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            let (x, y) = (i % width, i / width);
-            if x == 0 || y == 0 || x + 1 == width || y + 1 == height {
-                touch = true;
-            }
-            for j in four_neighbours(i, width, height).into_iter().flatten() {
-                if !valid[j] {
-                    touch = true;
-                } else if inside(j) && label[j] == 0 {
-                    label[j] = id;
-                    stack.push(j);
-                }
-            }
-        }
-        touches.push(touch);
-    }
-    (label, touches)
 }

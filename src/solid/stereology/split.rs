@@ -23,7 +23,7 @@
 
 use rayon::prelude::*;
 
-use super::watershed::four_neighbours;
+use super::watershed::{component_sizes, components};
 use crate::error::{Error, Result};
 use crate::rng;
 
@@ -240,8 +240,9 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
             let first = candidate.classify_colours(&c, photo.valid);
             let mut out = ClassCounts::default();
             for class in 0..2 {
-                let inside = |i: usize| photo.valid[i] && first[i] == (class == 0);
-                let sizes = region_sizes(photo.width, photo.height, &inside);
+                let inside = |i: usize| first[i] == (class == 0);
+                let (label, _) = components(photo.width, photo.height, photo.valid, &inside);
+                let sizes = component_sizes(&label);
                 out.pixels[class] = sizes.iter().sum();
                 out.largest[class] = sizes.iter().copied().max().unwrap_or(0);
             }
@@ -273,29 +274,26 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
             *mean = colour.map(|s| s / n);
         }
     }
-    let counts = [0, 1].map(|c| [counts.pixels[c], counts.largest[c]]);
-    let share = [0, 1].map(|c| counts[c][1] as f64 / counts[c][0].max(1) as f64);
-    let area = counts[0][0] as f64 / (counts[0][0] + counts[1][0]).max(1) as f64;
+    let share = [0, 1].map(|c| counts.largest[c] as f64 / counts.pixels[c].max(1) as f64);
+    let area = counts.pixels[0] as f64 / (counts.pixels[0] + counts.pixels[1]).max(1) as f64;
     let lum = |c: [f64; 3]| c[0] + c[1] + c[2];
     let dist = |a: [f64; 3], b: [u8; 3]| (0..3).map(|k| (a[k] - b[k] as f64).powi(2)).sum::<f64>();
-    let first_is_particles = |yes: bool, by: &'static str| Ok((yes, by));
+    // Whether the first class is the particles, and what said so.
     let (first, decided_by) = match particles {
-        Particles::Light => first_is_particles(lum(means[0]) > lum(means[1]), "light"),
-        Particles::Dark => first_is_particles(lum(means[0]) < lum(means[1]), "dark"),
-        Particles::Colour(c) => first_is_particles(dist(means[0], c) < dist(means[1], c), "colour"),
+        Particles::Light => (lum(means[0]) > lum(means[1]), "light"),
+        Particles::Dark => (lum(means[0]) < lum(means[1]), "dark"),
+        Particles::Colour(c) => (dist(means[0], c) < dist(means[1], c), "colour"),
         Particles::Auto if (share[0] - share[1]).abs() >= DECISIVE => {
-            first_is_particles(share[0] < share[1], "connectivity")
+            (share[0] < share[1], "connectivity")
         }
-        Particles::Auto if area.min(1.0 - area) <= MINORITY => {
-            first_is_particles(area < 0.5, "minority")
-        }
+        Particles::Auto if area.min(1.0 - area) <= MINORITY => (area < 0.5, "minority"),
         Particles::Auto => {
             let names = if lum(means[0]) > lum(means[1]) {
                 ["light", "dark"]
             } else {
                 ["dark", "light"]
             };
-            Err(Error::invalid(format!(
+            return Err(Error::invalid(format!(
                 "cannot tell the particles from the binder: the {} class (mean colour {}) and the {} \
                  class ({}) cover {:.0}% and {:.0}% of the photographs measured, and their largest \
                  regions hold {:.0}% and {:.0}% of each (the binder is usually the one connected \
@@ -309,9 +307,9 @@ pub fn split(photos: &[Photo], particles: Particles, seed: u64) -> Result<Split>
                 100.0 * (1.0 - area),
                 100.0 * share[0],
                 100.0 * share[1]
-            )))
+            )));
         }
-    }?;
+    };
     let (p, b) = if first { (0, 1) } else { (1, 0) };
     Ok(Split {
         particle: means[p],
@@ -549,32 +547,6 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// Pixel counts of the 4-connected regions where `inside` holds.
-fn region_sizes(width: usize, height: usize, inside: &dyn Fn(usize) -> bool) -> Vec<usize> {
-    let mut seen = vec![false; width * height];
-    let mut sizes = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..width * height {
-        if seen[start] || !inside(start) {
-            continue;
-        }
-        seen[start] = true;
-        stack.push(start);
-        let mut size = 0;
-        while let Some(i) = stack.pop() {
-            size += 1;
-            for j in four_neighbours(i, width, height).into_iter().flatten() {
-                if !seen[j] && inside(j) {
-                    seen[j] = true;
-                    stack.push(j);
-                }
-            }
-        }
-        sizes.push(size);
-    }
-    sizes
 }
 
 #[cfg(test)]

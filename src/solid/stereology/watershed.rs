@@ -28,6 +28,56 @@ pub(super) fn four_neighbours(i: usize, width: usize, height: usize) -> [Option<
     ]
 }
 
+/// 4-connected components of the usable pixels where `inside` holds:
+/// per pixel its component (1-based, 0 outside), and per component whether
+/// it touches the image's border or an unusable pixel.
+pub(super) fn components(
+    width: usize,
+    height: usize,
+    valid: &[bool],
+    inside: &dyn Fn(usize) -> bool,
+) -> (Vec<u32>, Vec<bool>) {
+    let mut label = vec![0u32; valid.len()];
+    let mut touches = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..valid.len() {
+        if !valid[start] || !inside(start) || label[start] != 0 {
+            continue;
+        }
+        let id = touches.len() as u32 + 1;
+        let mut touch = false;
+        label[start] = id;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            let (x, y) = (i % width, i / width);
+            if x == 0 || y == 0 || x + 1 == width || y + 1 == height {
+                touch = true;
+            }
+            for j in four_neighbours(i, width, height).into_iter().flatten() {
+                if !valid[j] {
+                    touch = true;
+                } else if inside(j) && label[j] == 0 {
+                    label[j] = id;
+                    stack.push(j);
+                }
+            }
+        }
+        touches.push(touch);
+    }
+    (label, touches)
+}
+
+/// Pixels of each component of `label` (as `components` numbers them).
+pub(super) fn component_sizes(label: &[u32]) -> Vec<usize> {
+    let mut sizes = vec![0usize; label.iter().copied().max().unwrap_or(0) as usize];
+    for &c in label {
+        if c != 0 {
+            sizes[c as usize - 1] += 1;
+        }
+    }
+    sizes
+}
+
 /// Per pixel its profile (1-based, 0 not a particle) after splitting the
 /// particle pixels' 4-connected regions at their necks, and per profile
 /// whether it touches the image's border or an unusable pixel.

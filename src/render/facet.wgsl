@@ -36,6 +36,51 @@ struct Carve {
 @group(2) @binding(1) var carve_sampler: sampler;
 @group(2) @binding(2) var<uniform> carve: Carve;
 
+// The mucus film is not even: it pools in some places and thins to a
+// trace in others, so real frames glint in clusters of many sizes, with
+// stretches of wall between them that hardly glint at all. The film's
+// thickness here is a smooth random field over the surface (value noise,
+// two octaves), fixed in the tissue so it does not swim as the scope
+// moves, its patches WET_PATCH of the facet's texture tile across (3.2
+// mm on the default wall's 16 mm tiles; an atlas, untransformed, counts
+// one mesh unit as its tile), so the field scales with the
+// scene. Where it pools the film is thick and levels the relief (its
+// glints fewer and broader); where it thins the coat fades to 3%.
+// The .glb's clear coat stays even (glTF has no such field short of a
+// texture per facet).
+const WET_PATCH: f32 = 0.2;
+
+fn lattice(i: vec3<i32>) -> f32 {
+    var h = u32(i.x) * 0x8da6b343u ^ u32(i.y) * 0xd8163841u ^ u32(i.z) * 0xcb1ab31fu;
+    h = (h ^ (h >> 15u)) * 0x2c1b3c6du;
+    h = (h ^ (h >> 12u)) * 0x297a2d39u;
+    return f32(h >> 8u) / 16777216.0;
+}
+
+fn value_noise(p: vec3<f32>) -> f32 {
+    let i = vec3<i32>(floor(p));
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    var corners: array<f32, 8>;
+    for (var k = 0; k < 8; k++) {
+        corners[k] = lattice(i + vec3<i32>(k & 1, (k >> 1) & 1, k >> 2));
+    }
+    let x00 = mix(corners[0], corners[1], u.x);
+    let x10 = mix(corners[2], corners[3], u.x);
+    let x01 = mix(corners[4], corners[5], u.x);
+    let x11 = mix(corners[6], corners[7], u.x);
+    return mix(mix(x00, x10, u.y), mix(x01, x11, u.y), u.z);
+}
+
+// 0 where the film is a trace, 1 where it pools.
+fn wetness(p: vec3<f32>) -> f32 {
+    // The texture transform's first row is the tile's reciprocal.
+    let tile = 1.0 / max(length(material.row0.xy), 1e-6);
+    let q = p / (WET_PATCH * tile);
+    let n = 0.65 * value_noise(q) + 0.35 * value_noise(q / 0.4 + 17.3);
+    return smoothstep(0.45, 0.75, n);
+}
+
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
@@ -53,6 +98,7 @@ struct VertexOut {
     @location(3) alpha: f32,
     @location(4) tangent: vec4<f32>,
     @location(5) heat: f32,
+    @location(6) wet: f32,
 }
 
 fn vertex(v: VertexIn) -> VertexOut {
@@ -65,6 +111,8 @@ fn vertex(v: VertexIn) -> VertexOut {
     out.alpha = v.alpha;
     out.tangent = v.tangent;
     out.heat = v.heat;
+    // Per vertex: the film's patches span many triangles.
+    out.wet = wetness(v.position);
     return out;
 }
 
@@ -100,6 +148,28 @@ fn heat_colour(h: f32) -> vec3<f32> {
 
 // FILM_RELIEF (scene::draw::FILM_RELIEF) is prepended with the globals.
 const FILM_LEVELS: f32 = 2.5;
+// Where the film pools it levels the relief this many mip levels more.
+const POOL_LEVELS: f32 = 2.0;
+
+// The scope's depth of field. A hysteroscope's lens is fixed-focus, set
+// for the wall a few millimetres from its tip, and its small sensor
+// resolves less the farther the tissue: past the focus the blur circle
+// grows as 1 - focus / distance (thin lens, far side), so the far cavity
+// is soft and featureless as in real frames, not sharp to the fundus.
+// The blur is taken as a coarser mip level of the textures, DEFOCUS_LEVELS
+// levels (a blur of 2^levels pixels at the preview's size) at infinity;
+// the focus is SCOPE_FOCUS of the view's typical depth (9 mm at 36 mm).
+// The even light, for judging textures, keeps them sharp.
+const SCOPE_FOCUS: f32 = 0.25;
+const DEFOCUS_LEVELS: f32 = 3.0;
+
+fn defocus(p: vec3<f32>) -> f32 {
+    if globals.flags.z < 0.5 {
+        return 0.0;
+    }
+    let d = max(length(globals.eye.xyz - p), 1e-6);
+    return DEFOCUS_LEVELS * max(1.0 - SCOPE_FOCUS * globals.eye.w / d, 0.0);
+}
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
@@ -109,10 +179,13 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var n = normalize(in.normal);
     var n_film = n;
     var finish = Finish(material.normal.y, material.normal.z, material.normal.w);
+    let blur = defocus(in.world);
+    let wet = in.wet;
+    finish.coat = finish.coat * mix(0.03, 1.0, wet);
     if globals.flags.x > 0.5 && material.normal.x > 0.0 {
         let t = normalize(in.tangent.xyz - n * dot(n, in.tangent.xyz));
         let b = cross(n, t) * in.tangent.w;
-        let m = textureSample(normal_texture, normal_sampler, in.uv).xyz * 2.0 - 1.0;
+        let m = textureSampleBias(normal_texture, normal_sampler, in.uv, blur).xyz * 2.0 - 1.0;
         let bump = material.normal.x;
         let tbn = mat3x3<f32>(t, b, n);
         // The film levels the relief finer than a few texels (surface
@@ -120,7 +193,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         // levels coarser, so its glints are a few broad wet patches where
         // the relief faces the scope, as in real frames, not a sparkle on
         // every bump.
-        let mf = textureSampleBias(normal_texture, normal_sampler, in.uv, FILM_LEVELS).xyz * 2.0 - 1.0;
+        let mf = textureSampleBias(normal_texture, normal_sampler, in.uv, FILM_LEVELS + POOL_LEVELS * wet + blur).xyz * 2.0 - 1.0;
         let film_relief = bump * FILM_RELIEF;
         n_film = normalize(tbn * vec3<f32>(mf.xy * film_relief, mf.z));
         n = normalize(tbn * vec3<f32>(m.xy * bump, m.z));
@@ -135,7 +208,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if globals.flags.y > 0.5 {
         return vec4<f32>(heat_colour(in.heat) * headlamp(n, in.world), 1.0);
     }
-    let c = textureSample(colour_texture, colour_sampler, in.uv) * material.factor;
+    let c = textureSampleBias(colour_texture, colour_sampler, in.uv, blur) * material.factor;
     return vec4<f32>(shade_wet(c.rgb, n, n_film, in.world, finish), c.a * in.alpha);
 }
 

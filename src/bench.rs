@@ -220,6 +220,43 @@ pub fn workloads() -> Vec<Workload> {
             },
         },
         Workload {
+            name: "stereology 128, 12 large",
+            min_runs: 1,
+            what: "particles from 12 noisy 2048x2048 sections through a Boolean model of spheres (issue 38's study, as check_stereology.py --large draws it, made untimed): the split of all 12, their profiles, unfolding, placement, annealing and block synthesis, 128^3 (target <= 20 s)",
+            prepare: |_| {
+                let side = 2048;
+                let photographs = large_sections(12, side, 38);
+                let valid = vec![true; side * side];
+                Ok(Box::new(move || {
+                    use crate::solid::stereology::{profiles, split};
+                    use rayon::prelude::*;
+                    let photos: Vec<split::Photo> = photographs
+                        .iter()
+                        .map(|pixels| split::Photo {
+                            width: side,
+                            height: side,
+                            pixels,
+                            valid: &valid,
+                        })
+                        .collect();
+                    let split = split::split(&photos, split::Particles::Auto, 0)?;
+                    let sections = photos
+                        .par_iter()
+                        .map(|&photo| profiles::find_with(photo, &split))
+                        .collect::<Result<Vec<_>>>()?;
+                    crate::solid::stereology::synthesize(
+                        &sections,
+                        &crate::solid::stereology::StereologyOptions {
+                            size: 128,
+                            ..Default::default()
+                        },
+                        &Silent,
+                    )
+                    .map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "lst fill kiwi",
             min_runs: 1,
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
@@ -362,6 +399,84 @@ pub fn workloads() -> Vec<Workload> {
 
 /// Synthesise `output` pixels square from the top left `input` square of
 /// the gravel photograph of tests/data/textures.
+/// Issue 38's large study, as `tools/check_stereology.py --large` draws
+/// it: `count` photographs of `side` x `side` pixels cutting a Boolean
+/// model of spheres (lognormal diameters, median 14 px, at most 40; a
+/// volume fraction of 0.077), light particles (190, 150, 160) on a dark
+/// binder (150, 110, 120) under Gaussian noise of 15 levels. Centres reach
+/// past the frame so its border is not thinned; the sphere count is its
+/// expectation.
+fn large_sections(count: usize, side: usize, seed: u64) -> Vec<Vec<[u8; 3]>> {
+    use crate::rng::{normal, unit};
+    use rayon::prelude::*;
+    const D_MAX: f64 = 40.0;
+    const FRACTION: f64 = 0.077;
+    const NOISE: f64 = 15.0;
+    let (light, dark) = ([190.0, 150.0, 160.0], [150.0, 110.0, 120.0]);
+    // The k-th diameter drawn under `key`, redrawn until in (2, 40] px.
+    let diameter = |key: &[u64]| -> f64 {
+        (0u64..)
+            .map(|t| {
+                let k: Vec<u64> = key.iter().copied().chain([t]).collect();
+                (0.35f64.ln() + 0.35 * normal(seed, &k)).exp() * D_MAX
+            })
+            .find(|d| *d > 0.05 * D_MAX && *d <= D_MAX)
+            .expect("the lognormal reaches (2, 40]")
+    };
+    let mean_volume = (0..20_000u64)
+        .map(|k| std::f64::consts::PI / 6.0 * diameter(&[0, k]).powi(3))
+        .sum::<f64>()
+        / 20_000.0;
+    // A Boolean model covers 1 - exp(-N_V E[V]) of space.
+    let per_volume = -(1.0 - FRACTION).ln() / mean_volume;
+    let r_max = D_MAX / 2.0;
+    let span = side as f64 + 2.0 * r_max;
+    let spheres = (per_volume * span * span * 2.0 * r_max).round() as u64;
+    (0..count as u64)
+        .into_par_iter()
+        .map(|photo| {
+            let mut inside = vec![false; side * side];
+            for s in 0..spheres {
+                let key = [1, photo, s];
+                let at = |k: u64| unit(seed, &[2, photo, s, k]);
+                let (cx, cy) = (at(0) * span - r_max, at(1) * span - r_max);
+                let h = (2.0 * at(2) - 1.0) * r_max;
+                let r2 = (diameter(&key) / 2.0).powi(2) - h * h;
+                if r2 <= 0.0 {
+                    continue;
+                }
+                let r = r2.sqrt();
+                let span_of = |c: f64| {
+                    (
+                        (c - r).max(0.0) as usize,
+                        ((c + r + 1.0).max(0.0) as usize).min(side),
+                    )
+                };
+                let ((x0, x1), (y0, y1)) = (span_of(cx), span_of(cy));
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - cy);
+                        if dx * dx + dy * dy < r2 {
+                            inside[y * side + x] = true;
+                        }
+                    }
+                }
+            }
+            inside
+                .iter()
+                .enumerate()
+                .map(|(i, &particle)| {
+                    let base = if particle { light } else { dark };
+                    [0, 1, 2].map(|c| {
+                        let n = normal(seed, &[3, photo, i as u64, c as u64]);
+                        (base[c] + NOISE * n).round().clamp(0.0, 255.0) as u8
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
 fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
     let gravel = root
         .join("tests")

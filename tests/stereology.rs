@@ -320,3 +320,79 @@ fn bad_stereology_input_gives_clear_errors() {
     assert!(!out.exists(), "nothing written");
     let _ = Volume::read_nrrd(&out).expect_err("no block");
 }
+
+/// Issue 38: in a study of several photographs, one that shows no
+/// particle (a field of binder alone) is measured, warned of and counted
+/// towards the volume fraction's area, not refused; alone it is refused,
+/// naming the file.
+#[test]
+fn a_photograph_of_binder_alone_is_a_finding_in_a_study() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let side = 128u32;
+    let photo = |name: &str, discs: &[(f64, f64, f64)]| {
+        let path = dir.path().join(name);
+        image::RgbImage::from_fn(side, side, |x, y| {
+            let inside = discs
+                .iter()
+                .any(|&(cx, cy, r)| (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy) < r);
+            image::Rgb(if inside { PARTICLE } else { BINDER })
+        })
+        .save(&path)
+        .expect("png");
+        path
+    };
+    // Rows of small discs, a little apart in size.
+    let grid = |radius: f64, shift: f64| -> Vec<(f64, f64, f64)> {
+        (0..25)
+            .map(|k| {
+                let r = radius + (k % 3) as f64;
+                (
+                    16.0 + 24.0 * (k % 5) as f64 + shift,
+                    16.0 + 24.0 * (k / 5) as f64,
+                    r,
+                )
+            })
+            .collect()
+    };
+    let a = photo("a.png", &grid(3.0, 0.0));
+    let b = photo("b.png", &grid(4.0, 3.0));
+    let c = photo("c.png", &[]);
+    let particles = stereology::Particles::Auto;
+    let two = stereology::read_sections(&[a.clone(), b.clone()], None, particles, 0).expect("a, b");
+    let three = stereology::read_sections(&[a, b, c.clone()], None, particles, 0).expect("a, b, c");
+    assert_eq!(three.len(), 3);
+    assert!(three[2].profiles.is_empty());
+    assert!(
+        three[2]
+            .unmeasured()
+            .is_some_and(|w| w.contains("all binder"))
+    );
+    let opts = StereologyOptions {
+        size: 48,
+        ..Default::default()
+    };
+    let (_, with_two) = stereology::synthesize(&two, &opts, &Silent).expect("block of two");
+    let (_, with_three) = stereology::synthesize(&three, &opts, &Silent).expect("block of three");
+    assert!(with_two.warnings.is_empty(), "{:?}", with_two.warnings);
+    assert!(
+        with_three
+            .warnings
+            .iter()
+            .any(|w| w.contains("1 of the 3 photographs (number 3")),
+        "{:?}",
+        with_three.warnings
+    );
+    // Delesse: the binder field's area counts, so the fraction is two
+    // thirds of the two photographs' own.
+    let ratio = with_three.volume_fraction / with_two.volume_fraction;
+    assert!((ratio - 2.0 / 3.0).abs() < 1e-9, "{ratio}");
+    assert_eq!(with_three.profiles, with_two.profiles);
+    // Alone, it is refused, named.
+    let err = stereology::read_sections(&[c], None, particles, 0)
+        .expect_err("no particle")
+        .to_string();
+    assert!(
+        err.contains("c.png") && err.contains("no particles"),
+        "{err}"
+    );
+}

@@ -251,11 +251,27 @@ pub fn read_sections(
         e => e.in_file(&photographs[0]),
     };
     let split = split::split(&photos, particles, seed).map_err(in_files)?;
-    photos
+    let sections: Vec<Section> = photos
         .par_iter()
         .zip(photographs)
         .map(|(&photo, path)| profiles::find_with(photo, &split).map_err(|e| e.in_file(path)))
-        .collect()
+        .collect::<Result<_>>()?;
+    // A photograph with no profile to measure is a finding (`synthesize`
+    // warns of it); all of them, nothing to unfold.
+    if let Some(why) = sections
+        .iter()
+        .map(Section::unmeasured)
+        .collect::<Option<Vec<_>>>()
+    {
+        let first = &why[0];
+        return Err(Error::invalid(if photographs.len() > 1 {
+            format!("none of the photographs has a profile to measure; the first: {first}")
+        } else {
+            first.clone()
+        })
+        .in_file(&photographs[0]));
+    }
+    Ok(sections)
 }
 
 /// A colour category of particles.
@@ -485,7 +501,21 @@ pub fn synthesize(
     let cut: usize = sections.iter().map(|s| s.cut).sum();
     let specks: usize = sections.iter().map(|s| s.specks).sum();
     let split = sections[0].split.clone();
-    let warnings = warnings(&split, profiles.len(), cut, specks);
+    let unmeasured: Vec<usize> = (0..sections.len())
+        .filter(|&k| sections[k].profiles.is_empty())
+        .collect();
+    let mut warnings = warnings(&split, profiles.len(), cut, specks);
+    if !unmeasured.is_empty() {
+        let which: Vec<String> = unmeasured.iter().map(|k| (k + 1).to_string()).collect();
+        warnings.push(format!(
+            "{} of the {} photographs (number {} in the order given) show no particle profile to \
+             measure (all binder under the shared split, or every profile cut by the frame): their \
+             area counts towards the volume fraction, not the sizes",
+            unmeasured.len(),
+            sections.len(),
+            which.join(", ")
+        ));
+    }
     Ok((
         volume,
         Report {

@@ -57,6 +57,24 @@ pub struct Section {
 }
 
 impl Section {
+    /// Why the section has no profile to measure; None when it has.
+    pub fn unmeasured(&self) -> Option<String> {
+        if !self.profiles.is_empty() {
+            return None;
+        }
+        Some(if self.cut > 0 {
+            format!(
+                "every one of the {} particle profiles found touches the border or the mask: none can be measured",
+                self.cut
+            )
+        } else if self.specks > 0 {
+            format!("no particles found: no profile of {MIN_AREA} pixels or more")
+        } else {
+            "no particles found: the split of all the photographs leaves this one all binder"
+                .to_string()
+        })
+    }
+
     /// The photograph less its profiles' and binder's mean colours (seed
     /// 001, 4.3), for the fine detail.
     pub fn residual(&self) -> super::residual::Residual2d {
@@ -92,10 +110,17 @@ pub fn find(
         valid,
     };
     let split = split::split(&[photo], Particles::Auto, seed)?;
-    find_with(photo, &split)
+    let section = find_with(photo, &split)?;
+    match section.unmeasured() {
+        Some(why) => Err(Error::invalid(why)),
+        None => Ok(section),
+    }
 }
 
-/// Find the profiles of `photo`, classed by `split`.
+/// Find the profiles of `photo`, classed by `split`. A photograph with
+/// none to measure is a section all the same (`Section::unmeasured`
+/// says why): in a study of several its area still counts towards the
+/// volume fraction.
 pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
     let Photo {
         width,
@@ -108,11 +133,6 @@ pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
         return Err(Error::invalid("the section has almost no usable pixels"));
     }
     let mut particle = split.classify(photo);
-    if !usable.iter().any(|&i| particle[i]) {
-        return Err(Error::invalid(
-            "no particles found: the split of all the photographs leaves this one all binder",
-        ));
-    }
     // Particle components, specks among them (under MIN_AREA pixels:
     // noise) given to the binder; then binder components: a binder region
     // that one particle component encloses (a gland's lumen inside its
@@ -206,15 +226,6 @@ pub fn find_with(photo: Photo, split: &Split) -> Result<Section> {
         .map(|&c| if c == 0 { 0 } else { label_of[c as usize - 1] })
         .collect();
     let n_particle = usable.iter().filter(|&&i| is_particle[i]).count();
-    if profiles.is_empty() {
-        return Err(Error::invalid(if cut > 0 {
-            format!(
-                "every one of the {cut} particle profiles found touches the border or the mask: none can be measured"
-            )
-        } else {
-            "no particles found: no profile of 9 pixels or more".to_string()
-        }));
-    }
     let mut binder = [0f64; 3];
     let mut n_binder = 0usize;
     for &i in &usable {

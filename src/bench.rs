@@ -228,8 +228,7 @@ pub fn workloads() -> Vec<Workload> {
                 let photographs = large_sections(12, side, 38);
                 let valid = vec![true; side * side];
                 Ok(Box::new(move || {
-                    use crate::solid::stereology::{profiles, split};
-                    use rayon::prelude::*;
+                    use crate::solid::stereology::{sections_of, split};
                     let photos: Vec<split::Photo> = photographs
                         .iter()
                         .map(|pixels| split::Photo {
@@ -239,11 +238,7 @@ pub fn workloads() -> Vec<Workload> {
                             valid: &valid,
                         })
                         .collect();
-                    let split = split::split(&photos, split::Particles::Auto, 0)?;
-                    let sections = photos
-                        .par_iter()
-                        .map(|&photo| profiles::find_with(photo, &split))
-                        .collect::<Result<Vec<_>>>()?;
+                    let sections = sections_of(&photos, split::Particles::Auto, 0, &|e, _| e)?;
                     crate::solid::stereology::synthesize(
                         &sections,
                         &crate::solid::stereology::StereologyOptions {
@@ -397,15 +392,14 @@ pub fn workloads() -> Vec<Workload> {
     ]
 }
 
-/// Synthesise `output` pixels square from the top left `input` square of
-/// the gravel photograph of tests/data/textures.
-/// Issue 38's large study, as `tools/check_stereology.py --large` draws
-/// it: `count` photographs of `side` x `side` pixels cutting a Boolean
+/// Issue 38's large study, drawn as `tools/check_stereology.py --large`
+/// draws it (but for the sphere count, its expectation rather than a
+/// Poisson draw, and the mean sphere volume from 20,000 diameters rather
+/// than 200,000): `count` photographs of `side` x `side` pixels cutting a Boolean
 /// model of spheres (lognormal diameters, median 14 px, at most 40; a
 /// volume fraction of 0.077), light particles (190, 150, 160) on a dark
 /// binder (150, 110, 120) under Gaussian noise of 15 levels. Centres reach
-/// past the frame so its border is not thinned; the sphere count is its
-/// expectation.
+/// past the frame so its border is not thinned.
 fn large_sections(count: usize, side: usize, seed: u64) -> Vec<Vec<[u8; 3]>> {
     use crate::rng::{normal, unit};
     use rayon::prelude::*;
@@ -477,6 +471,8 @@ fn large_sections(count: usize, side: usize, seed: u64) -> Vec<Vec<[u8; 3]>> {
         .collect()
 }
 
+/// Synthesise `output` pixels square from the top left `input` square of
+/// the gravel photograph of tests/data/textures.
 fn synth_step(root: &Path, input: u32, output: usize) -> Result<Step> {
     let gravel = root
         .join("tests")

@@ -356,6 +356,7 @@ fn a_photograph_of_binder_alone_is_a_finding_in_a_study() {
     };
     let a = photo("a.png", &grid(3.0, 0.0));
     let b = photo("b.png", &grid(4.0, 3.0));
+    let b2 = b.clone();
     let c = photo("c.png", &[]);
     let particles = stereology::Particles::Auto;
     let two = stereology::read_sections(&[a.clone(), b.clone()], None, particles, 0).expect("a, b");
@@ -378,7 +379,7 @@ fn a_photograph_of_binder_alone_is_a_finding_in_a_study() {
         with_three
             .warnings
             .iter()
-            .any(|w| w.contains("1 of the 3 photographs (number 3")),
+            .any(|w| w.contains("1 of the 3 photographs") && w.contains("number 3: no particles")),
         "{:?}",
         with_three.warnings
     );
@@ -387,6 +388,38 @@ fn a_photograph_of_binder_alone_is_a_finding_in_a_study() {
     let ratio = with_three.volume_fraction / with_two.volume_fraction;
     assert!((ratio - 2.0 / 3.0).abs() < 1e-9, "{ratio}");
     assert_eq!(with_three.profiles, with_two.profiles);
+    // The fine detail comes from a photograph with particles, though the
+    // binder field is as large: the block's particles are the particles'
+    // colour.
+    let (block, _) = stereology::synthesize(&three, &opts, &Silent).expect("block of three");
+    let near = |v: &[u8; 3], c: [u8; 3]| -> i32 {
+        v.iter()
+            .zip(c)
+            .map(|(&a, b)| (a as i32 - b as i32).abs())
+            .sum()
+    };
+    let dark = block
+        .voxels
+        .iter()
+        .filter(|v| near(v, PARTICLE) < near(v, BINDER))
+        .count() as f64
+        / block.voxels.len() as f64;
+    assert!(
+        (dark / with_three.block_volume_fraction - 1.0).abs() < 0.25,
+        "particle-coloured voxels {dark} against the block's fraction {}",
+        with_three.block_volume_fraction
+    );
+    // A photograph whose only particle the frame cuts is a finding too,
+    // with its reason.
+    let d = photo("d.png", &[(0.0, 64.0, 20.0)]);
+    let with_cut = stereology::read_sections(&[b2.clone(), d], None, particles, 0).expect("b, d");
+    assert!(
+        with_cut[1]
+            .unmeasured()
+            .is_some_and(|w| w.contains("touches the border")),
+        "{:?}",
+        with_cut[1].unmeasured()
+    );
     // Alone, it is refused, named.
     let err = stereology::read_sections(&[c], None, particles, 0)
         .expect_err("no particle")

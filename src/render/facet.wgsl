@@ -7,7 +7,8 @@
 // wireframe and seam lines, from the same vertices.
 
 struct Material {
-    // The texture transform as two rows of a 2x3 matrix.
+    // The texture transform as two rows of a 2x3 matrix; row0.w is 1 where
+    // the texture is a tissue tiled through it, 0 for an atlas.
     row0: vec4<f32>,
     row1: vec4<f32>,
     factor: vec4<f32>,
@@ -39,19 +40,22 @@ struct Carve {
 // The mucus film is not even: it pools in some places and thins to a
 // trace in others, so real frames glint in clusters of many sizes, with
 // stretches of wall between them that hardly glint at all. The film's
-// thickness here is a smooth random field over the surface (value noise,
-// two octaves), fixed in the tissue so it does not swim as the scope
-// moves, its patches WET_PATCH of the facet's texture tile across (3.2
-// mm on the default wall's 16 mm tiles; an atlas, untransformed, counts
-// one mesh unit as its tile), so the field scales with the
-// scene. Where it pools the film is thick and levels the relief (its
-// glints fewer and broader); where it thins the coat fades to 3%.
-// The .glb's clear coat stays even (glTF has no such field short of a
-// texture per facet).
+// thickness here is a smooth random field over the surface (value noise),
+// fixed in the tissue so it does not swim as the scope moves, its
+// patches WET_PATCH of the facet's texture tile across (3.2 mm on the
+// default wall's 16 mm tiles, 0.8 mm on the polyp's 4 mm), so the field
+// scales with the scene (an overlay's layer by its own tile, so a vessel
+// may glint where the tissue under it does not). It is taken per vertex, which the patches span
+// several of on the bundled scenes; a mesh coarser than its tissue's
+// tile would alias it. Where the film pools it is thick and levels the
+// relief (its glints fewer and broader); where it thins the coat fades
+// to 3%. An atlas, laid out once rather than tiled, has no tile to scale
+// by and keeps an even film, as the .glb's clear coat does everywhere
+// (glTF has no such field short of a texture per facet).
 const WET_PATCH: f32 = 0.2;
 
 fn lattice(i: vec3<i32>) -> f32 {
-    var h = u32(i.x) * 0x8da6b343u ^ u32(i.y) * 0xd8163841u ^ u32(i.z) * 0xcb1ab31fu;
+    var h = (u32(i.x) * 0x8da6b343u) ^ (u32(i.y) * 0xd8163841u) ^ (u32(i.z) * 0xcb1ab31fu);
     h = (h ^ (h >> 15u)) * 0x2c1b3c6du;
     h = (h ^ (h >> 12u)) * 0x297a2d39u;
     return f32(h >> 8u) / 16777216.0;
@@ -74,11 +78,12 @@ fn value_noise(p: vec3<f32>) -> f32 {
 
 // 0 where the film is a trace, 1 where it pools.
 fn wetness(p: vec3<f32>) -> f32 {
+    if material.row0.w < 0.5 {
+        return 1.0;
+    }
     // The texture transform's first row is the tile's reciprocal.
     let tile = 1.0 / max(length(material.row0.xy), 1e-6);
-    let q = p / (WET_PATCH * tile);
-    let n = 0.65 * value_noise(q) + 0.35 * value_noise(q / 0.4 + 17.3);
-    return smoothstep(0.45, 0.75, n);
+    return smoothstep(0.45, 0.75, value_noise(p / (WET_PATCH * tile)));
 }
 
 struct VertexIn {
@@ -157,7 +162,8 @@ const POOL_LEVELS: f32 = 2.0;
 // grows as 1 - focus / distance (thin lens, far side), so the far cavity
 // is soft and featureless as in real frames, not sharp to the fundus.
 // The blur is taken as a coarser mip level of the textures, DEFOCUS_LEVELS
-// levels (a blur of 2^levels pixels at the preview's size) at infinity;
+// levels at infinity (a blur of about 2^levels screen pixels where the
+// texture is minified; none where it is magnified past that);
 // the focus is SCOPE_FOCUS of the view's typical depth (9 mm at 36 mm).
 // The even light, for judging textures, keeps them sharp.
 const SCOPE_FOCUS: f32 = 0.25;

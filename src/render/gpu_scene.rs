@@ -87,7 +87,10 @@ fn material_uniform(m: &Material, transform: Option<&Transform>) -> [f32; 16] {
     let [sx, sy] = t.scale;
     // uv' = offset + R (scale * uv), R = [[c, s], [-s, c]]
     // (KHR_texture_transform, as composite::Transform::apply).
-    let row0 = [c * sx, s * sy, t.offset[0], 0.0].map(|v| v as f32);
+    // row0.w: the texture is tiled through a transform (a tissue), not
+    // laid out once (an atlas); facet.wgsl's wet film scales with the tile.
+    let tiled = if transform.is_some() { 1.0 } else { 0.0 };
+    let row0 = [c * sx, s * sy, t.offset[0], tiled].map(|v| v as f32);
     let row1 = [-s * sx, c * sy, t.offset[1], 0.0].map(|v| v as f32);
     let bump = m.normal.as_ref().map_or(0.0, |n| n.scale);
     let mut u = [0.0; 16];

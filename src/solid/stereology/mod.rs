@@ -242,34 +242,49 @@ pub fn read_sections(
         })
         .collect();
     // The split is of all photographs together: name them.
-    let in_files = |e: Error| match e {
-        Error::Invalid { path: None, msg } if photographs.len() > 1 => Error::invalid(format!(
-            "{} and {} other photographs: {msg}",
-            photographs[0].display(),
-            photographs.len() - 1
-        )),
-        e => e.in_file(&photographs[0]),
+    let in_files = |e: Error, photograph: Option<usize>| match (e, photograph) {
+        (e, Some(k)) => e.in_file(&photographs[k]),
+        (Error::Invalid { path: None, msg }, None) if photographs.len() > 1 => {
+            Error::invalid(format!(
+                "{} and {} other photographs: {msg}",
+                photographs[0].display(),
+                photographs.len() - 1
+            ))
+        }
+        (e, None) => e.in_file(&photographs[0]),
     };
-    let split = split::split(&photos, particles, seed).map_err(in_files)?;
+    sections_of(&photos, particles, seed, &in_files)
+}
+
+/// The sections `photos` show, all split into particles and binder alike
+/// (`split`), the particle class as `particles` asks. A photograph with
+/// no profile to measure is a section all the same (`synthesize` warns
+/// of it); a study where none has one is refused. Errors go through
+/// `attribute` with the photograph they concern (None: the study's).
+pub fn sections_of(
+    photos: &[split::Photo],
+    particles: Particles,
+    seed: u64,
+    attribute: &(dyn Fn(Error, Option<usize>) -> Error + Sync),
+) -> Result<Vec<Section>> {
+    let split = split::split(photos, particles, seed).map_err(|e| attribute(e, None))?;
     let sections: Vec<Section> = photos
         .par_iter()
-        .zip(photographs)
-        .map(|(&photo, path)| profiles::find_with(photo, &split).map_err(|e| e.in_file(path)))
+        .enumerate()
+        .map(|(k, &photo)| profiles::find_with(photo, &split).map_err(|e| attribute(e, Some(k))))
         .collect::<Result<_>>()?;
-    // A photograph with no profile to measure is a finding (`synthesize`
-    // warns of it); all of them, nothing to unfold.
     if let Some(why) = sections
         .iter()
         .map(Section::unmeasured)
         .collect::<Option<Vec<_>>>()
     {
         let first = &why[0];
-        return Err(Error::invalid(if photographs.len() > 1 {
+        let msg = if photos.len() > 1 {
             format!("none of the photographs has a profile to measure; the first: {first}")
         } else {
             first.clone()
-        })
-        .in_file(&photographs[0]));
+        };
+        return Err(attribute(Error::invalid(msg), Some(0)));
     }
     Ok(sections)
 }
@@ -453,11 +468,13 @@ pub fn synthesize(
     progress.advance(1);
     crate::progress::check(progress)?;
 
-    // Fine detail from the largest photograph.
+    // Fine detail from the largest photograph that shows particles (one
+    // of binder alone has none of their texture to give).
     let start = Instant::now();
     let (index, largest) = sections
         .iter()
         .enumerate()
+        .filter(|(_, s)| !s.profiles.is_empty())
         .max_by(|a, b| a.1.area.total_cmp(&b.1.area))
         .expect("a section");
     match opts.detail {
@@ -501,19 +518,19 @@ pub fn synthesize(
     let cut: usize = sections.iter().map(|s| s.cut).sum();
     let specks: usize = sections.iter().map(|s| s.specks).sum();
     let split = sections[0].split.clone();
-    let unmeasured: Vec<usize> = (0..sections.len())
-        .filter(|&k| sections[k].profiles.is_empty())
-        .collect();
     let mut warnings = warnings(&split, profiles.len(), cut, specks);
+    let unmeasured: Vec<String> = sections
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| s.unmeasured().map(|why| format!("number {}: {why}", k + 1)))
+        .collect();
     if !unmeasured.is_empty() {
-        let which: Vec<String> = unmeasured.iter().map(|k| (k + 1).to_string()).collect();
         warnings.push(format!(
-            "{} of the {} photographs (number {} in the order given) show no particle profile to \
-             measure (all binder under the shared split, or every profile cut by the frame): their \
-             area counts towards the volume fraction, not the sizes",
+            "{} of the {} photographs (in the order given) show no particle profile to measure, \
+             their area counted towards the volume fraction, not the sizes: {}",
             unmeasured.len(),
             sections.len(),
-            which.join(", ")
+            unmeasured.join("; ")
         ));
     }
     Ok((

@@ -67,7 +67,7 @@ impl Section {
                 "every one of the {} particle profiles found touches the border or the mask: none can be measured",
                 self.cut
             )
-        } else if self.specks > 0 {
+        } else if self.specks > 0 || self.area_fraction > 0.0 {
             format!("no particles found: no profile of {MIN_AREA} pixels or more")
         } else {
             "no particles found: the split of all the photographs leaves this one all binder"

@@ -46,7 +46,10 @@ pub fn check(block: &Volume, sections: &[Section], bins: usize) -> SliceCheck {
         let slices = n.div_ceil(STEP);
         for k in 0..slices {
             let (w, h, pixels) = block.slice(axis, k * STEP);
-            // A slice with no particle is a finding, not an error.
+            // A slice with no profile to measure (no particle, or every
+            // one cut by the slice's edge) is a finding, not an error: its
+            // particle pixels still count towards the area fraction, as
+            // the photographs' do.
             let photo = Photo {
                 width: w,
                 height: h,

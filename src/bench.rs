@@ -395,8 +395,8 @@ pub fn workloads() -> Vec<Workload> {
 /// Issue 38's large study, drawn as `tools/check_stereology.py --large`
 /// draws it (but for the sphere count, its expectation rather than a
 /// Poisson draw, and the mean sphere volume from 20,000 diameters rather
-/// than 200,000): `count` photographs of `side` x `side` pixels cutting a Boolean
-/// model of spheres (lognormal diameters, median 14 px, at most 40; a
+/// than 200,000): `count` photographs of `side` x `side` pixels cutting a
+/// Boolean model of spheres (lognormal diameters, median 14 px, at most 40; a
 /// volume fraction of 0.077), light particles (190, 150, 160) on a dark
 /// binder (150, 110, 120) under Gaussian noise of 15 levels. Centres reach
 /// past the frame so its border is not thinned.

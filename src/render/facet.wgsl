@@ -45,13 +45,14 @@ struct Carve {
 // patches WET_PATCH of the facet's texture tile across (3.2 mm on the
 // default wall's 16 mm tiles, 0.8 mm on the polyp's 4 mm), so the field
 // scales with the scene (an overlay's layer by its own tile, so a vessel
-// may glint where the tissue under it does not). It is taken per vertex, which the patches span
-// several of on the bundled scenes; a mesh coarser than its tissue's
-// tile would alias it. Where the film pools it is thick and levels the
-// relief (its glints fewer and broader); where it thins the coat fades
-// to 3%. An atlas, laid out once rather than tiled, has no tile to scale
-// by and keeps an even film, as the .glb's clear coat does everywhere
-// (glTF has no such field short of a texture per facet).
+// may glint where the tissue under it does not). It is taken per vertex,
+// which the patches span several of on the bundled scenes; a mesh
+// coarser than its tissue's tile would alias it. Where the film pools it
+// is thick and levels the relief (its glints fewer and broader); where it
+// thins the coat fades to 3%. An atlas, laid out once rather than tiled,
+// has no tile to scale by and keeps an even film, as the .glb's clear
+// coat does everywhere (glTF has no such field short of a texture per
+// facet).
 const WET_PATCH: f32 = 0.2;
 
 fn lattice(i: vec3<i32>) -> f32 {
@@ -116,7 +117,6 @@ fn vertex(v: VertexIn) -> VertexOut {
     out.alpha = v.alpha;
     out.tangent = v.tangent;
     out.heat = v.heat;
-    // Per vertex: the film's patches span many triangles.
     out.wet = wetness(v.position);
     return out;
 }

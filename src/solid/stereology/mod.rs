@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-pub use profiles::{Profile, Section};
+pub use profiles::{Profile, Section, sections_of};
 pub use split::{Particles, Split};
 pub use unfold::Distribution;
 
@@ -253,40 +253,7 @@ pub fn read_sections(
         }
         (e, None) => e.in_file(&photographs[0]),
     };
-    sections_of(&photos, particles, seed, &in_files)
-}
-
-/// The sections `photos` show, all split into particles and binder alike
-/// (`split`), the particle class as `particles` asks. A photograph with
-/// no profile to measure is a section all the same (`synthesize` warns
-/// of it); a study where none has one is refused. Errors go through
-/// `attribute` with the photograph they concern (None: the study's).
-pub fn sections_of(
-    photos: &[split::Photo],
-    particles: Particles,
-    seed: u64,
-    attribute: &(dyn Fn(Error, Option<usize>) -> Error + Sync),
-) -> Result<Vec<Section>> {
-    let split = split::split(photos, particles, seed).map_err(|e| attribute(e, None))?;
-    let sections: Vec<Section> = photos
-        .par_iter()
-        .enumerate()
-        .map(|(k, &photo)| profiles::find_with(photo, &split).map_err(|e| attribute(e, Some(k))))
-        .collect::<Result<_>>()?;
-    if let Some(why) = sections
-        .iter()
-        .map(Section::unmeasured)
-        .collect::<Option<Vec<_>>>()
-    {
-        let first = &why[0];
-        let msg = if photos.len() > 1 {
-            format!("none of the photographs has a profile to measure; the first: {first}")
-        } else {
-            first.clone()
-        };
-        return Err(attribute(Error::invalid(msg), Some(0)));
-    }
-    Ok(sections)
+    profiles::sections_of(&photos, particles, seed, &in_files)
 }
 
 /// A colour category of particles.
@@ -518,21 +485,7 @@ pub fn synthesize(
     let cut: usize = sections.iter().map(|s| s.cut).sum();
     let specks: usize = sections.iter().map(|s| s.specks).sum();
     let split = sections[0].split.clone();
-    let mut warnings = warnings(&split, profiles.len(), cut, specks);
-    let unmeasured: Vec<String> = sections
-        .iter()
-        .enumerate()
-        .filter_map(|(k, s)| s.unmeasured().map(|why| format!("number {}: {why}", k + 1)))
-        .collect();
-    if !unmeasured.is_empty() {
-        warnings.push(format!(
-            "{} of the {} photographs (in the order given) show no particle profile to measure, \
-             their area counted towards the volume fraction, not the sizes: {}",
-            unmeasured.len(),
-            sections.len(),
-            unmeasured.join("; ")
-        ));
-    }
+    let warnings = warnings(sections, profiles.len(), cut, specks);
     Ok((
         volume,
         Report {
@@ -562,10 +515,12 @@ pub fn synthesize(
 /// Specks per profile past which the particle class is suspect.
 const SPECKS_PER_PROFILE: usize = 4;
 
-/// What looks wrong in a measurement of `profiles` profiles, `cut` more
-/// cut by the frame and `specks` noise regions (issue 38: a flipped class
-/// gave 68,000 "profiles" and no word).
-fn warnings(split: &Split, profiles: usize, cut: usize, specks: usize) -> Vec<String> {
+/// What looks wrong in a measurement of `sections` with `profiles`
+/// profiles, `cut` more cut by the frame and `specks` noise regions
+/// (issue 38: a flipped class gave 68,000 "profiles" and no word), and
+/// which photographs had nothing to measure.
+fn warnings(sections: &[Section], profiles: usize, cut: usize, specks: usize) -> Vec<String> {
+    let split = &sections[0].split;
     let mut out = Vec::new();
     if 2 * cut > profiles + cut {
         out.push(format!(
@@ -594,6 +549,20 @@ fn warnings(split: &Split, profiles: usize, cut: usize, specks: usize) -> Vec<St
             "particles and binder differ little in colour against the pixels' noise ({apart:.0} levels \
              apart, noise {noise:.0}{}): profiles may be merged or broken",
             if split.smoothed { " after 3x3 means" } else { "" }
+        ));
+    }
+    let unmeasured: Vec<String> = sections
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| s.unmeasured().map(|why| format!("number {}: {why}", k + 1)))
+        .collect();
+    if !unmeasured.is_empty() {
+        out.push(format!(
+            "{} of the {} photographs (in the order given) show no particle profile to measure, \
+             their area counted towards the volume fraction, not the sizes: {}",
+            unmeasured.len(),
+            sections.len(),
+            unmeasured.join("; ")
         ));
     }
     out

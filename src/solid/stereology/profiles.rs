@@ -12,6 +12,8 @@
 
 use super::split::{self, Particles, Photo, Split};
 use super::watershed::{component_sizes, components, four_neighbours};
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
 
 /// Profiles smaller than this many pixels are noise, not particles.
@@ -109,12 +111,41 @@ pub fn find(
         pixels,
         valid,
     };
-    let split = split::split(&[photo], Particles::Auto, seed)?;
-    let section = find_with(photo, &split)?;
-    match section.unmeasured() {
-        Some(why) => Err(Error::invalid(why)),
-        None => Ok(section),
+    let mut sections = sections_of(&[photo], Particles::Auto, seed, &|e, _| e)?;
+    Ok(sections.pop().expect("one photograph, one section"))
+}
+
+/// The sections `photos` show, all split into particles and binder alike
+/// (`split`), the particle class as `particles` asks. A photograph with
+/// no profile to measure is a section all the same (`synthesize` warns
+/// of it); a study where none has one is refused. Errors go through
+/// `attribute` with the photograph they concern (None: the study's).
+pub fn sections_of(
+    photos: &[split::Photo],
+    particles: Particles,
+    seed: u64,
+    attribute: &(dyn Fn(Error, Option<usize>) -> Error + Sync),
+) -> Result<Vec<Section>> {
+    let split = split::split(photos, particles, seed).map_err(|e| attribute(e, None))?;
+    let sections: Vec<Section> = photos
+        .par_iter()
+        .enumerate()
+        .map(|(k, &photo)| find_with(photo, &split).map_err(|e| attribute(e, Some(k))))
+        .collect::<Result<_>>()?;
+    if let Some(why) = sections
+        .iter()
+        .map(Section::unmeasured)
+        .collect::<Option<Vec<_>>>()
+    {
+        let first = &why[0];
+        let msg = if photos.len() > 1 {
+            format!("none of the photographs has a profile to measure; the first: {first}")
+        } else {
+            first.clone()
+        };
+        return Err(attribute(Error::invalid(msg), Some(0)));
     }
+    Ok(sections)
 }
 
 /// Find the profiles of `photo`, classed by `split`. A photograph with

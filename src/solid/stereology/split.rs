@@ -17,9 +17,10 @@
 //!   threefold; pixels go to the nearer class mean, the midpoint between
 //!   them, so a blurred straight border stays where it was;
 //! - which class is the particles is decided by connectivity across up
-//!   to `STATISTICS_PHOTOS` photographs, evenly spaced (the binder is the continuous phase: its largest region
-//!   holds most of it, the particles' largest one little), else by area
-//!   (the minority), else the user is asked (`Particles`).
+//!   to `STATISTICS_PHOTOS` photographs, evenly spaced (the binder is the
+//!   continuous phase: its largest region holds most of it, the
+//!   particles' largest one little), else by area (the minority), else
+//!   the user is asked (`Particles`).
 
 use rayon::prelude::*;
 
@@ -553,6 +554,21 @@ fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 mod tests {
     use super::*;
 
+    /// A square photograph, colour `a` where `is_a(x, y)` holds, else `b`.
+    fn two_colours(
+        side: usize,
+        is_a: impl Fn(f64, f64) -> bool,
+        a: [u8; 3],
+        b: [u8; 3],
+    ) -> Vec<[u8; 3]> {
+        (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f64, (i / side) as f64);
+                if is_a(x, y) { a } else { b }
+            })
+            .collect()
+    }
+
     fn square<'a>(side: usize, pixels: &'a [[u8; 3]], valid: &'a [bool]) -> Photo<'a> {
         Photo {
             width: side,
@@ -604,15 +620,12 @@ mod tests {
     fn stripes_are_refused_as_ambiguous() {
         // Stripes: each class half the area, in as many equal regions.
         let side = 64;
-        let pixels: Vec<[u8; 3]> = (0..side * side)
-            .map(|i| {
-                if (i % side) / 8 % 2 == 0 {
-                    [40, 40, 40]
-                } else {
-                    [200, 200, 200]
-                }
-            })
-            .collect();
+        let pixels = two_colours(
+            side,
+            |x, _| (x as usize / 8).is_multiple_of(2),
+            [40; 3],
+            [200; 3],
+        );
         let valid = vec![true; side * side];
         let photo = square(side, &pixels, &valid);
         let err = split(&[photo], Particles::Auto, 0).expect_err("ambiguous");
@@ -625,16 +638,8 @@ mod tests {
     fn classes_of_equal_luminance_split() {
         // Red discs on green: no spread along grey at all.
         let side = 64;
-        let pixels: Vec<[u8; 3]> = (0..side * side)
-            .map(|i| {
-                let (x, y) = ((i % side) as f64, (i / side) as f64);
-                if (x % 16.0 - 8.0).powi(2) + (y % 16.0 - 8.0).powi(2) < 16.0 {
-                    [200, 100, 100]
-                } else {
-                    [100, 200, 100]
-                }
-            })
-            .collect();
+        let disc = |x: f64, y: f64| (x % 16.0 - 8.0).powi(2) + (y % 16.0 - 8.0).powi(2) < 16.0;
+        let pixels = two_colours(side, disc, [200, 100, 100], [100, 200, 100]);
         let valid = vec![true; side * side];
         let photo = square(side, &pixels, &valid);
         let s = split(&[photo], Particles::Auto, 0).expect("a split");

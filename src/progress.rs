@@ -6,6 +6,19 @@
 
 use crate::error::{Error, Result};
 
+/// `n` with commas between thousands, as reports print counts.
+pub fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
 pub trait Progress: Sync {
     /// A stage begins; `total` steps are expected (0 when unknown).
     fn stage(&self, _name: &str, _total: u64) {}

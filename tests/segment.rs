@@ -609,3 +609,49 @@ fn a_scene_from_the_mni_brain_bakes_end_to_end() {
         assert!(err.contains("line"), "{err}");
     }
 }
+
+/// What the viewer offers when it opens a file: a Slicer segmentation's
+/// segments by name with their voxels, largest first; the MNI white
+/// matter (a probability map stored as 0..255) a threshold inside its
+/// range, no labels.
+#[test]
+fn a_files_regions_are_listed_for_the_user_to_choose() {
+    use segment::contents::contents;
+    let dir = tempfile::tempdir().unwrap();
+    let (path, layers, _, _) = slicer_segmentation(dir.path());
+    let c = contents(&path).unwrap();
+    let count =
+        |layer: usize, label: f32| layers[layer].iter().filter(|&&v| v == label).count() as u64;
+    let mut want = vec![
+        (
+            segment::Choice::Segment("white matter".into()),
+            count(0, 1.0),
+        ),
+        (segment::Choice::Segment("lesion".into()), count(1, 4.0)),
+    ];
+    want.sort_by_key(|w| std::cmp::Reverse(w.1));
+    let got: Vec<_> = c
+        .regions
+        .iter()
+        .map(|r| (r.choice.clone(), r.voxels))
+        .collect();
+    assert_eq!(got, want);
+    assert!(c.regions.iter().all(|r| r.name.contains("voxels")));
+
+    let wm = contents(&volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz")).unwrap();
+    assert!(
+        wm.regions.is_empty(),
+        "{:?}",
+        &wm.regions[..3.min(wm.regions.len())]
+    );
+    assert_eq!(wm.range, (0.0, 255.0));
+    assert!(
+        wm.threshold > 50.0 && wm.threshold < 200.0,
+        "{}",
+        wm.threshold
+    );
+    assert_eq!(
+        wm.default_choice(),
+        segment::Choice::Threshold(wm.threshold)
+    );
+}

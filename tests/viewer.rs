@@ -530,3 +530,79 @@ fn the_carve_tool_removes_tets_under_the_pointer_and_shows_the_inside() {
         (0, 0)
     );
 }
+
+/// Opening a segmentation asks which region to mesh: its labels are
+/// listed, largest first; the one chosen is meshed in the file's world
+/// millimetres and waits for Unwrap as a bare mesh does.
+#[test]
+fn opening_a_segmentation_asks_which_label_and_meshes_it() {
+    use glam::{DAffine3, DVec3};
+    use organtex::segment::{ScalarVolume, nifti};
+    // Two balls: label 1 of radius 5 voxels, label 2 of radius 4.
+    let size = [24, 20, 20];
+    let balls = [
+        (1.0, DVec3::new(6.0, 10.0, 10.0), 5.0),
+        (2.0, DVec3::new(17.0, 10.0, 10.0), 4.0),
+    ];
+    let mut values = Vec::new();
+    for z in 0..size[2] {
+        for y in 0..size[1] {
+            for x in 0..size[0] {
+                let p = DVec3::new(x as f64, y as f64, z as f64);
+                let label = balls
+                    .iter()
+                    .find(|(_, c, r)| (p - *c).length() <= *r)
+                    .map_or(0.0, |b| b.0);
+                values.push(label);
+            }
+        }
+    }
+    let to_world = DAffine3::from_scale_rotation_translation(
+        DVec3::new(0.8, 0.8, 1.5),
+        glam::DQuat::IDENTITY,
+        DVec3::new(-40.0, 12.0, 100.0),
+    );
+    let volume = ScalarVolume {
+        size,
+        values,
+        to_world,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("balls.nii");
+    std::fs::write(&path, nifti::to_bytes(&volume)).unwrap();
+
+    let mut h = viewer(Some(path.clone()));
+    settle(&mut h);
+    assert!(
+        h.state().doc.is_none(),
+        "nothing is meshed before the user says what"
+    );
+    assert!(h.state_mut().region_dialog().is_some(), "the viewer asks");
+    let voxels = |label: f32| volume.values.iter().filter(|&&v| v == label).count();
+    let second = format!("label 2 ({} voxels)", voxels(2.0));
+    h.get_by_label(&format!("label 1 ({} voxels)", voxels(1.0)));
+    h.get_by_label(&second).click();
+    h.run_steps(2);
+    h.get_by_label("Mesh").click();
+    h.run_steps(2);
+    settle(&mut h);
+    assert!(h.state().message.is_none(), "{:?}", h.state().message);
+    assert!(h.state_mut().region_dialog().is_none());
+    let doc = h.state().doc.as_ref().expect("the region is open");
+    assert!(
+        doc.baked.is_none(),
+        "it waits for Unwrap, as a bare mesh does"
+    );
+    assert_eq!(doc.spec.name, "balls");
+    // Label 2's ball, in world millimetres: its centre through the
+    // transform, its radius within a voxel.
+    let (lo, hi) = doc.bounds().unwrap();
+    let centre = to_world.transform_point3(balls[1].1);
+    let half = DVec3::new(0.8, 0.8, 1.5) * 4.5;
+    for (got, want) in [(lo, centre - half), (hi, centre + half)] {
+        assert!(
+            (got - want).abs().cmple(DVec3::new(0.8, 0.8, 1.5)).all(),
+            "box corner {got} against {want}"
+        );
+    }
+}

@@ -35,11 +35,43 @@ impl Document {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
         if is_scene {
-            return Document::of_spec(file::load(path)?);
+            return Document::of_spec(file::load(path)?, &crate::progress::Silent);
         }
-        let mut doc = Document::of_spec(bare_mesh_scene(path)?)?;
-        // Tiles a sixth of the bounding box's diagonal, so a few copies of
-        // the texture cover the mesh whatever its units.
+        if crate::segment::contents::is_segmentation(path) {
+            return Err(Error::format(
+                path,
+                "is a segmentation: say which region to mesh (Document::of_segmentation)",
+            ));
+        }
+        known_mesh(path)?;
+        Document::bare(
+            path,
+            MeshSpec::File(path.to_path_buf()),
+            &crate::progress::Silent,
+        )
+    }
+
+    /// One region of a segmentation (a label, a segment or a threshold,
+    /// meshed as a scene's `[node.mesh.segmentation]` is), every facet
+    /// given the first tissue, waiting for Unwrap as a bare mesh does.
+    pub fn of_segmentation(
+        segmentation: file::Segmentation,
+        progress: &dyn crate::progress::Progress,
+    ) -> Result<Document> {
+        let path = segmentation.file.clone();
+        Document::bare(&path, MeshSpec::Segmentation(segmentation), progress)
+    }
+
+    /// A scene of one node, `mesh`, read from `path`, every facet the
+    /// bundled database's first colour tissue, tiled a sixth of the
+    /// bounding box's diagonal so a few copies of the texture cover the
+    /// mesh whatever its units.
+    fn bare(
+        path: &Path,
+        mesh: MeshSpec,
+        progress: &dyn crate::progress::Progress,
+    ) -> Result<Document> {
+        let mut doc = Document::of_spec(bare_scene(path, mesh)?, progress)?;
         if let Some((lo, hi)) = doc.bounds() {
             let tile = ((hi - lo).length() / 6.0).max(1e-9);
             for f in &mut doc.spec.nodes[0].facets {
@@ -52,14 +84,17 @@ impl Document {
 
     /// Read every node's mesh and give each of its facets its own
     /// settings entry (named after it), so each can be changed alone.
-    pub fn of_spec(mut spec: SceneSpec) -> Result<Document> {
+    pub fn of_spec(
+        mut spec: SceneSpec,
+        progress: &dyn crate::progress::Progress,
+    ) -> Result<Document> {
         let db = crate::db::Database::open(&spec.database)?;
         let ids: Vec<String> = db.tissues.iter().map(|t| t.id.clone()).collect();
         file::check_tissues(&spec, &ids)?;
         let mut meshes = Vec::new();
         let mut topologies = Vec::new();
         for node in &mut spec.nodes {
-            let (mesh, topology) = node_mesh(node, &crate::progress::Silent)?;
+            let (mesh, topology) = node_mesh(node, progress)?;
             let names = mesh
                 .facets
                 .as_ref()
@@ -175,24 +210,30 @@ fn absolute(p: &Path) -> PathBuf {
     std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
-/// A scene of one node, the mesh at `path`, every facet the bundled
-/// database's first colour tissue (tile sizes are set by `open`, once the
-/// mesh is read).
-fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
+/// Whether `path` is a mesh organtex reads; else an error naming it.
+fn known_mesh(path: &Path) -> Result<()> {
     let known = path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
         crate::mesh::io::READABLE
             .iter()
             .any(|m| e.eq_ignore_ascii_case(m))
     });
-    if !known {
-        return Err(Error::format(
-            path,
-            format!(
-                "not a scene (.toml) or a mesh ({})",
-                crate::mesh::io::READABLE.join(", ")
-            ),
-        ));
+    if known {
+        return Ok(());
     }
+    Err(Error::format(
+        path,
+        format!(
+            "not a scene (.toml), a mesh ({}) or a segmentation ({})",
+            crate::mesh::io::READABLE.join(", "),
+            crate::segment::contents::READABLE.join(", ")
+        ),
+    ))
+}
+
+/// A scene of one node, `mesh` (read from `path`), every facet the
+/// bundled database's first colour tissue (tile sizes are set by `bare`,
+/// once the mesh is read).
+fn bare_scene(path: &Path, mesh: MeshSpec) -> Result<SceneSpec> {
     let database = crate::scene::file::default_database();
     let db = crate::db::Database::open(&database)?;
     let texture = db
@@ -201,9 +242,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
         .find(|t| t.outputs.contains(&crate::db::Output::Colour))
         .map(|t| t.id.clone())
         .ok_or_else(|| Error::format(&database, "the tissue database has no colour texture"))?;
-    let name = path
-        .file_stem()
-        .map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+    let name = crate::segment::contents::stem(path);
     let origin = Origin {
         file: path.to_path_buf(),
         line: 0,
@@ -215,7 +254,7 @@ fn bare_mesh_scene(path: &Path) -> Result<SceneSpec> {
         cameras: Vec::new(),
         nodes: vec![NodeSpec {
             name,
-            mesh: MeshSpec::File(path.to_path_buf()),
+            mesh,
             facets: vec![FacetSettings {
                 name: "*".into(),
                 texture,

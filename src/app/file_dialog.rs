@@ -43,9 +43,11 @@ fn listing(dir: &Path, purpose: Purpose) -> Vec<(String, bool)> {
                         .extension()
                         .map(|x| x.to_string_lossy().to_ascii_lowercase());
                     let wanted = match purpose {
-                        Purpose::Open => ext
-                            .as_deref()
-                            .is_some_and(|x| x == "toml" || crate::mesh::io::READABLE.contains(&x)),
+                        Purpose::Open => {
+                            ext.as_deref().is_some_and(|x| {
+                                x == "toml" || crate::mesh::io::READABLE.contains(&x)
+                            }) || crate::segment::contents::is_segmentation(Path::new(&name))
+                        }
                         Purpose::Save => ext.as_deref() == Some("toml"),
                     };
                     (!name.starts_with('.') && (is_dir || wanted)).then_some((name, is_dir))
@@ -83,7 +85,7 @@ impl FileDialog {
     pub fn show(&mut self, ctx: &egui::Context) -> Outcome {
         let mut outcome = Outcome::Pending;
         let title = match self.purpose {
-            Purpose::Open => "Open a scene or mesh",
+            Purpose::Open => "Open a scene, mesh or segmentation",
             Purpose::Save => "Save the scene",
         };
         let mut go_to: Option<PathBuf> = None;

@@ -1,11 +1,12 @@
 //! The desktop viewer (`organtex view`): eframe + egui on wgpu, the scene
 //! drawn by `crate::render`, the same renderer as the bake's preview.
-//! Clinicians open a scene or a mesh, pick tissues, unwrap, move the
+//! Clinicians open a scene, a mesh or a segmentation (asked which region), pick tissues, unwrap, move the
 //! texture by mouse and cut the organ to see its inside.
 
 mod document;
 mod file_dialog;
 mod jobs;
+mod region_dialog;
 mod viewer;
 
 pub use document::Document;

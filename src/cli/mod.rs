@@ -148,17 +148,7 @@ pub fn print_json(figures: &impl serde::Serialize) {
     );
 }
 
-pub fn thousands(n: usize) -> String {
-    let digits = n.to_string();
-    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
+pub use organtex::progress::thousands;
 
 /// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
 /// naming the form expected.

@@ -110,6 +110,31 @@ fn default_segmentation_faces() -> usize {
 }
 
 impl Segmentation {
+    /// The region `choice` of `file`, with a scene's defaults (20 Taubin
+    /// iterations, 20,000 faces, the largest piece, voids kept).
+    pub fn of(file: PathBuf, choice: &crate::segment::Choice) -> Segmentation {
+        use crate::segment::Choice;
+        Segmentation {
+            file,
+            label: match choice {
+                Choice::Label(l) => Some(*l),
+                _ => None,
+            },
+            segment: match choice {
+                Choice::Segment(s) => Some(s.clone()),
+                _ => None,
+            },
+            threshold: match choice {
+                Choice::Threshold(t) => Some(*t),
+                _ => None,
+            },
+            smooth: default_smooth(),
+            faces: default_segmentation_faces(),
+            all_components: false,
+            fill_voids: false,
+        }
+    }
+
     /// What the region is, as `organtex mesh` takes it.
     pub fn choice(&self) -> std::result::Result<crate::segment::Choice, String> {
         use crate::segment::Choice;

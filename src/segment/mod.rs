@@ -2,6 +2,8 @@
 //! map or a probability map in, a closed, manifold, consistently oriented
 //! surface of one region out, in the scanner's millimetres.
 //!
+//! - `contents`: what a file holds to mesh (segments, labels, a grey
+//!   range), for a user choosing;
 //! - `nifti`: NIfTI-1 volumes (`.nii`, `.nii.gz`) and their voxel-to-world
 //!   map;
 //! - `nrrd`: NRRD label maps and 3D Slicer's segmentations (`.seg.nrrd`),
@@ -11,6 +13,7 @@
 //! - `smooth`: Taubin's lambda/mu smoothing, which takes the voxel
 //!   staircase away without shrinking the organ.
 
+pub mod contents;
 pub mod nifti;
 pub mod nrrd;
 pub mod pieces;

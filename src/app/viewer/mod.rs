@@ -32,11 +32,14 @@ pub use cut_plane::CutPlane;
 use super::document::Document;
 use super::file_dialog::{FileDialog, Outcome, Purpose};
 use super::jobs::{Job, Running};
+use super::region_dialog::{self, RegionDialog};
 use crate::db::Shelf;
 use crate::error::{Error, Result};
 use crate::render::{Filtering, Gpu, GpuScene, Layers, OrbitCamera, Renderer};
 use crate::scene::build::{BakedScene, Tissues};
 use crate::scene::draw::DrawList;
+use crate::scene::file::Segmentation;
+use crate::segment::contents::Contents;
 use crate::solid::Placement;
 use cut_plane::Interiors;
 use scene_view::SceneTarget;
@@ -45,8 +48,12 @@ use shelf::{Thumbnails, TissueEntry, thumbnails};
 /// How the viewer starts.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// A scene (.toml) or mesh to open.
+    /// A scene (.toml), mesh or segmentation to open.
     pub open: Option<PathBuf>,
+    /// When `open` is a segmentation: the region to mesh (None: the
+    /// viewer asks) and the face budget (None: the scene's default).
+    pub region: Option<crate::segment::Choice>,
+    pub faces: Option<usize>,
     /// Save a screenshot of the window after `frames` frames (once
     /// loading and unwrapping are done), then close.
     pub screenshot: Option<PathBuf>,
@@ -80,6 +87,8 @@ pub struct Message {
 #[derive(Default)]
 struct Jobs {
     open: Option<Job<Document>>,
+    /// Listing a segmentation's regions, to ask which one to mesh.
+    contents: Option<Job<(PathBuf, Contents)>>,
     unwrap: Option<Job<BakedScene>>,
     tissues: Option<Job<Tissues>>,
     thumbnails: Option<Job<Thumbnails>>,
@@ -90,8 +99,9 @@ struct Jobs {
 impl Jobs {
     /// The jobs the status bar shows (thumbnails load unannounced).
     fn shown(&self) -> Vec<&dyn Running> {
-        let jobs: [Option<&dyn Running>; 5] = [
+        let jobs: [Option<&dyn Running>; 6] = [
             self.open.as_ref().map(|j| j as &dyn Running),
+            self.contents.as_ref().map(|j| j as &dyn Running),
             self.unwrap.as_ref().map(|j| j as &dyn Running),
             self.tissues.as_ref().map(|j| j as &dyn Running),
             self.block.as_ref().map(|j| j as &dyn Running),
@@ -143,6 +153,8 @@ pub struct Viewer {
     /// The shelf the tissue panel shows.
     shelf: Shelf,
     dialog: Option<FileDialog>,
+    /// Asking which region of a segmentation to mesh.
+    region_dialog: Option<RegionDialog>,
     jobs: Jobs,
     /// Bumped by every change that alters the picture; a target whose
     /// picture is of an older generation is drawn again.
@@ -200,6 +212,7 @@ impl Viewer {
             tissues: Vec::new(),
             shelf: Shelf::Surface,
             dialog: None,
+            region_dialog: None,
             jobs: Jobs::default(),
             generation: 0,
             frames_left: opts.screenshot.as_ref().map(|_| opts.frames.max(1)),
@@ -247,11 +260,40 @@ impl Viewer {
     }
 
     /// Start opening `path`; the current scene stays until it has loaded.
+    /// A segmentation is listed first, and the user asked which region to
+    /// mesh (unless the viewer was started with one).
     pub fn open(&mut self, path: PathBuf) {
+        if crate::segment::contents::is_segmentation(&path) {
+            if let Some(choice) = self.opts.region.take() {
+                let mut seg = Segmentation::of(path, &choice);
+                seg.faces = self.opts.faces.unwrap_or(seg.faces);
+                self.open_segmentation(seg);
+                return;
+            }
+            let what = format!("reading {}", path.display());
+            self.jobs.contents = Some(Job::spawn(what, self.wake(), move |_| {
+                let contents = crate::segment::contents::contents(&path)?;
+                Ok((path, contents))
+            }));
+            return;
+        }
         let what = format!("opening {}", path.display());
         self.jobs.open = Some(Job::spawn(what, self.wake(), move |_| {
             Document::open(&path)
         }));
+    }
+
+    /// Start meshing a region of a segmentation as a bare mesh's scene.
+    pub fn open_segmentation(&mut self, segmentation: Segmentation) {
+        let what = format!("meshing {}", segmentation.file.display());
+        self.jobs.open = Some(Job::spawn(what, self.wake(), move |p| {
+            Document::of_segmentation(segmentation, p)
+        }));
+    }
+
+    /// The region dialog, while it asks.
+    pub fn region_dialog(&mut self) -> Option<&mut RegionDialog> {
+        self.region_dialog.as_mut()
     }
 
     /// Start unwrapping (cutting and flattening) every facet.
@@ -315,6 +357,15 @@ impl Viewer {
 
     /// Take finished jobs' results.
     fn poll_jobs(&mut self) {
+        if let Some(r) = self.jobs.contents.as_mut().and_then(Job::poll) {
+            self.jobs.contents = None;
+            match r {
+                Ok((path, contents)) => {
+                    self.region_dialog = Some(RegionDialog::new(path, contents))
+                }
+                Err(e) => self.error(e),
+            }
+        }
         if let Some(r) = self.jobs.open.as_mut().and_then(Job::poll) {
             self.jobs.open = None;
             match r {
@@ -470,6 +521,16 @@ impl eframe::App for Viewer {
                         Purpose::Open => self.open(path),
                         Purpose::Save => self.save_as(path),
                     }
+                }
+            }
+        }
+        if let Some(dialog) = &mut self.region_dialog {
+            match dialog.show(&ctx) {
+                region_dialog::Outcome::Pending => {}
+                region_dialog::Outcome::Cancelled => self.region_dialog = None,
+                region_dialog::Outcome::Chosen(segmentation) => {
+                    self.region_dialog = None;
+                    self.open_segmentation(segmentation);
                 }
             }
         }

@@ -6,7 +6,8 @@
 
 use crate::error::{Error, Result};
 
-/// `n` with commas between thousands, as reports print counts.
+/// `n` with its digits grouped in threes, as reports print counts:
+/// 56172 -> "56,172".
 pub fn thousands(n: usize) -> String {
     let digits = n.to_string();
     let mut out = String::with_capacity(digits.len() + digits.len() / 3);

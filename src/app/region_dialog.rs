@@ -1,8 +1,8 @@
 //! "Which region?": asked when the user opens a segmentation (a NIfTI
 //! label or probability map, a NRRD label map, a Slicer `.seg.nrrd`).
 //! It lists the file's segments or labels, largest first, or offers a
-//! threshold over its range, with the face budget and the pieces and
-//! voids `organtex mesh` takes; its answer is a scene's
+//! threshold over its range, with the face budget, pieces, voids and
+//! thin handles as `organtex mesh` takes them; its answer is a scene's
 //! `[node.mesh.segmentation]`.
 
 use std::path::PathBuf;
@@ -24,6 +24,9 @@ pub struct RegionDialog {
     pub faces: usize,
     pub all_components: bool,
     pub fill_voids: bool,
+    /// Cut or plug handles thinner than `handle` mm.
+    pub fix_handles: bool,
+    pub handle: f64,
 }
 
 /// What the user did this frame.
@@ -45,6 +48,8 @@ impl RegionDialog {
             faces: defaults.faces,
             all_components: defaults.all_components,
             fill_voids: defaults.fill_voids,
+            fix_handles: false,
+            handle: 2.0,
             path,
             contents,
         }
@@ -56,6 +61,7 @@ impl RegionDialog {
             faces: self.faces,
             all_components: self.all_components,
             fill_voids: self.fill_voids,
+            max_handle: self.fix_handles.then_some(self.handle),
             ..Segmentation::of(self.path.clone(), &self.choice)
         }
     }
@@ -116,6 +122,21 @@ impl RegionDialog {
                     .on_hover_text("default: the largest piece, by voxels");
                 ui.checkbox(&mut self.fill_voids, "fill enclosed voids")
                     .on_hover_text("default: each void is an inner shell of the surface");
+                ui.horizontal(|ui| {
+                    let check = ui
+                        .checkbox(&mut self.fix_handles, "remove handles thinner than")
+                        .on_hover_text(
+                            "cut thin bridges and plug narrow tunnels (e.g. across sulci); \
+                             pieces and voids stay",
+                        );
+                    ui.add(
+                        egui::DragValue::new(&mut self.handle)
+                            .range(0.1..=50.0)
+                            .speed(0.1)
+                            .suffix(" mm"),
+                    )
+                    .labelled_by(check.id);
+                });
                 ui.horizontal(|ui| {
                     if ui.button("Mesh").clicked() {
                         outcome = Outcome::Chosen(self.chosen());

@@ -138,7 +138,6 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// Group digits in threes, as the reports print counts: 56172 -> "56,172".
 /// Print figures as pretty JSON (`--json`). Plain numbers, paths and
 /// strings: serialising cannot fail.
 pub fn print_json(figures: &impl serde::Serialize) {
@@ -150,9 +149,6 @@ pub fn print_json(figures: &impl serde::Serialize) {
 
 pub use organtex::progress::thousands;
 
-/// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
-/// naming the form expected.
-/// A finite length above 0 (`--edge-length`, `--scale`).
 /// `path` must end in `.ext` (any case): the file a command writes.
 fn require_extension(path: &std::path::Path, ext: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {
@@ -174,6 +170,7 @@ fn check_spacing(spacing: f64) -> Result<()> {
     }
 }
 
+/// A finite length above 0 (`--edge-length`, `--scale`).
 fn positive_length(s: &str) -> std::result::Result<f64, String> {
     s.trim()
         .parse::<f64>()
@@ -182,6 +179,8 @@ fn positive_length(s: &str) -> std::result::Result<f64, String> {
         .ok_or_else(|| format!("'{s}' is not a positive length"))
 }
 
+/// `n` comma-separated numbers (an argument like `X,Y,Z`), or an error
+/// naming the form expected.
 fn comma_numbers<T: std::str::FromStr>(
     s: &str,
     n: usize,

@@ -279,6 +279,7 @@ fn segmentation_mesh(
         all_components: seg.all_components,
         fill_voids: seg.fill_voids,
         faces: Some(seg.faces),
+        max_handle: seg.max_handle,
     };
     let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, progress)?;
     Ok(mesh)

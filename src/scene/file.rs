@@ -99,6 +99,10 @@ pub struct Segmentation {
     pub all_components: bool,
     #[serde(default)]
     pub fill_voids: bool,
+    /// Cut or plug handles thinner than this, mm (`organtex mesh
+    /// --max-handle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_handle: Option<f64>,
 }
 
 fn default_smooth() -> usize {
@@ -132,6 +136,7 @@ impl Segmentation {
             faces: default_segmentation_faces(),
             all_components: false,
             fill_voids: false,
+            max_handle: None,
         }
     }
 

@@ -4,6 +4,7 @@
 //!
 //! - `contents`: what a file holds to mesh (segments, labels, a grey
 //!   range), for a user choosing;
+//! - `handles`: handles thinner than a size cut or plugged in the voxels;
 //! - `nifti`: NIfTI-1 volumes (`.nii`, `.nii.gz`) and their voxel-to-world
 //!   map;
 //! - `nrrd`: NRRD label maps and 3D Slicer's segmentations (`.seg.nrrd`),
@@ -14,6 +15,7 @@
 //!   staircase away without shrinking the organ.
 
 pub mod contents;
+pub mod handles;
 pub mod nifti;
 pub mod nrrd;
 pub mod pieces;
@@ -175,6 +177,8 @@ pub struct MeshOptions {
     /// Decimate to at most this many faces (quadric error collapses that
     /// keep the surface manifold, then tangential relaxation).
     pub faces: Option<usize>,
+    /// Cut or plug the region's handles thinner than this, mm (`handles`).
+    pub max_handle: Option<f64>,
 }
 
 /// Tangential relaxation rounds after decimating.
@@ -203,6 +207,9 @@ pub struct MeshReport {
     pub volume: f64,
     /// The smallest angle of any face, degrees.
     pub min_angle: f64,
+    /// What `max_handle` did, genus before and after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub handles: Option<handles::HandleFix>,
 }
 
 /// The surface of `region` in `volume`. `name` names the file in errors.
@@ -212,8 +219,22 @@ pub fn mesh(
     opts: &MeshOptions,
     progress: &dyn Progress,
 ) -> Result<(TriMesh, MeshReport)> {
-    let inside = select(volume, name, opts.region)?;
-    let region_voxels = inside.iter().filter(|&&b| b).count() as u64;
+    let selected = select(volume, name, opts.region)?;
+    let region_voxels = selected.iter().filter(|&&b| b).count() as u64;
+    let (inside, handles) = match opts.max_handle {
+        Some(mm) => {
+            if !(mm.is_finite() && mm > 0.0) {
+                return Err(Error::invalid(format!(
+                    "the handle size {mm} mm is not a length above 0"
+                )));
+            }
+            let spacing = volume.voxel_volume().cbrt();
+            let (fixed, fix) =
+                handles::remove_handles(volume.size, &selected, mm, spacing, progress)?;
+            (fixed, Some(fix))
+        }
+        None => (selected.clone(), None),
+    };
     progress.stage("finding the region's pieces and voids", 1);
     let found = pieces::pieces(volume.size, &inside, progress)?;
     let components = found.count();
@@ -236,25 +257,28 @@ pub fn mesh(
     let voxels = kept.iter().filter(|&&b| b).count() as u64;
     // One step per slab of cubes, the padding's included.
     progress.stage("extracting the surface", volume.size[2] as u64 + 1);
-    // A grey volume keeps its values where the kept voxels are its own (the
-    // surface is interpolated there); voxels of dropped pieces go below
-    // the level and filled voids onto it. No tetrahedron edge the surface
-    // crosses has a rewritten voxel at an end (a dropped piece's
-    // neighbours are all outside, a filled void's all inside), so no
-    // crossing moves.
+    // A grey volume keeps its values where the kept voxels are the ones
+    // selected (the surface is interpolated there). A voxel that changed
+    // sides (a dropped piece, a filled void, a handle's cut or plug) takes
+    // its value mirrored about the level, onto the side it is now on: the
+    // surface crosses an edge from it where it would cross one from a
+    // voxel as far on that side (a dropped piece's and a filled void's
+    // neighbours changed sides with them, so no edge from them crosses).
     let adjusted: Vec<f32>;
     let field = match opts.region {
         Region::Label(_) => surface::Field::Binary(&kept),
-        Region::Threshold(t) if kept == inside => surface::Field::Scalar(&volume.values, level(t)),
+        Region::Threshold(t) if kept == selected => {
+            surface::Field::Scalar(&volume.values, level(t))
+        }
         Region::Threshold(t) => {
             let level = level(t);
             adjusted = volume
                 .values
                 .iter()
-                .zip(kept.iter().zip(&inside))
-                .map(|(&v, (&k, &i))| match (k, i) {
-                    (true, false) => level,
-                    (false, true) => f32::MIN,
+                .zip(kept.iter().zip(&selected))
+                .map(|(&v, (&k, &s))| match (k, s) {
+                    (true, false) => (2.0 * level - v).max(level),
+                    (false, true) => (2.0 * level - v).min(level.next_down()),
                     _ => v,
                 })
                 .collect();
@@ -297,6 +321,7 @@ pub fn mesh(
                 crate::mesh::decimate::min_angle(a, b, c)
             })
             .fold(180.0, f64::min),
+        handles,
     };
     Ok((mesh, report))
 }

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::progress::{self, Progress};
 
 /// The 14 neighbours of the Kuhn split (see the module's comment).
-const NEIGHBOURS: [[i64; 3]; 14] = [
+pub(super) const NEIGHBOURS: [[i64; 3]; 14] = [
     [1, 0, 0],
     [0, 1, 0],
     [0, 0, 1],

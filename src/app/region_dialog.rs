@@ -40,12 +40,14 @@ pub enum Outcome {
 const FACES: std::ops::RangeInclusive<usize> = 1_000..=500_000;
 
 impl RegionDialog {
-    pub fn new(path: PathBuf, contents: Contents) -> RegionDialog {
+    /// Asking about `path`, which holds `contents`; `faces`: the budget
+    /// offered (None: a scene's default).
+    pub fn new(path: PathBuf, contents: Contents, faces: Option<usize>) -> RegionDialog {
         let defaults = Segmentation::of(path.clone(), &contents.default_choice());
         RegionDialog {
             choice: contents.default_choice(),
             threshold: contents.threshold,
-            faces: defaults.faces,
+            faces: faces.unwrap_or(defaults.faces),
             all_components: defaults.all_components,
             fill_voids: defaults.fill_voids,
             fix_handles: false,

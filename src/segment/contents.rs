@@ -64,7 +64,7 @@ pub struct Contents {
     /// threshold is chosen in.
     pub range: (f32, f32),
     /// The threshold offered: 0.5 on a probability map (values within
-    /// 0..1), else Otsu's (`otsu`).
+    /// 0..1, on both sides of 0.5), else Otsu's (`otsu`).
     pub threshold: f64,
 }
 
@@ -116,7 +116,7 @@ pub fn contents(path: &Path) -> Result<Contents> {
     };
     // Largest first; a stable sort keeps the file's order among equals.
     regions.sort_by_key(|r| std::cmp::Reverse(r.voxels));
-    let threshold = if range.0 >= 0.0 && range.1 <= 1.0 {
+    let threshold = if range.0 >= 0.0 && range.1 <= 1.0 && range.0 < 0.5 && range.1 >= 0.5 {
         0.5
     } else {
         otsu(&first.values, range)

@@ -51,8 +51,8 @@ pub struct HandleFix {
 }
 
 /// `inside` with its handles thinner than `max_handle` mm cut or plugged,
-/// on a grid of `size` voxels of `spacing` mm (the mean, for anisotropic
-/// voxels).
+/// on a grid of `size` voxels of `spacing` mm (for anisotropic voxels, the
+/// geometric mean: the ball is round in voxels, not in millimetres).
 pub fn remove_handles(
     size: [usize; 3],
     inside: &[bool],
@@ -60,9 +60,22 @@ pub fn remove_handles(
     spacing: f64,
     progress: &dyn Progress,
 ) -> Result<(Vec<bool>, HandleFix)> {
+    if !inside.contains(&true) {
+        let none = HandleFix {
+            max_handle,
+            genus_before: 0,
+            genus_after: 0,
+            cut: 0,
+            filled: 0,
+            voxels_removed: 0,
+            voxels_added: 0,
+        };
+        return Ok((inside.to_vec(), none));
+    }
     // The work is done on the region's box with a margin (what lies
     // beyond it is outside, as beyond the grid), then put back.
-    let margin = (0.5 * max_handle / spacing).ceil() as usize + 2;
+    let largest = *size.iter().max().expect("three sides") as f64;
+    let margin = ((0.5 * max_handle / spacing).ceil().min(largest) as usize).saturating_add(2);
     let (crop, sub) = Crop::around(size, inside, margin);
     let (fixed_sub, fix) = remove_in(crop.size, &sub, max_handle, spacing, progress)?;
     let mut fixed = inside.to_vec();
@@ -135,7 +148,12 @@ fn remove_in(
     // its own small cut, so a larger size never leaves more handles (one
     // large opening joins neighbouring handles' cuts into groups that
     // split a piece, and are refused whole).
-    let last = (3.0 * 0.5 * max_handle / spacing).round() as u32;
+    // Past the grid's longest side the opening is empty: no larger ball
+    // is tried.
+    let longest = *size.iter().max().expect("three sides") as f64;
+    let last = (3.0 * 0.5 * max_handle / spacing)
+        .round()
+        .min(3.0 * longest) as u32;
     let radii: Vec<u32> = (1..)
         .map(|k| 3 * k)
         .take_while(|&r| r < last)
@@ -437,11 +455,8 @@ fn keep_lowering(
     if !kept.iter().any(|&k| k) {
         return Ok((result, 0));
     }
-    // A group beside two pieces of the result (cut), or beside a void the
-    // set did not have or beside none of the set (plugged), changed more
-    // than a handle: undone. One round: an undone group only restores what
-    // it had changed. Only what the check needs is found: the result's
-    // pieces for cuts, the voids before and after for plugs.
+    // A group that changed more than a handle is undone (below). One
+    // round: an undone group only restores what it had changed.
     let (after, new_void) = if cut {
         (
             pieces::pieces(grid.size, &result, progress)?.of_voxel,
@@ -451,32 +466,37 @@ fn keep_lowering(
         let (before, _) = pieces::voids(grid.size, set, progress)?;
         let (after, _) = pieces::voids(grid.size, &result, progress)?;
         let new: Vec<bool> = after.iter().zip(&before).map(|(&a, &b)| a && !b).collect();
-        (Vec::new(), new)
+        (pieces::pieces(grid.size, set, progress)?.of_voxel, new)
     };
     for (g, voxels) in members.iter().enumerate() {
         if !kept[g] {
             continue;
         }
+        // A cut must leave tissue beside it (else it deletes a whole
+        // piece) in one piece, and face the outside (else it is a new
+        // void); a plug must join the tissue of one piece (else it is a
+        // piece of its own, or joins two) and face the outside left (else
+        // it fills a whole void).
         let mut seen = pieces::NONE;
-        // A plug beside none of the set would be a piece of its own.
-        let (mut splits, mut touches) = (false, cut);
+        let (mut wrong, mut tissue, mut open) = (false, false, false);
         for &i in voxels {
             let c = grid.coords(i);
             for d in NEIGHBOURS {
-                let Some(j) = grid.offset(c, d) else { continue };
-                if cut {
-                    let p = after[j];
-                    if p != pieces::NONE {
-                        splits |= seen != pieces::NONE && seen != p;
-                        seen = p;
-                    }
-                } else {
-                    splits |= new_void[j];
-                    touches |= set[j];
+                let Some(j) = grid.offset(c, d) else {
+                    open = true;
+                    continue;
+                };
+                let p = after[j];
+                if p != pieces::NONE && (cut || set[j]) {
+                    wrong |= seen != pieces::NONE && seen != p;
+                    seen = p;
+                    tissue = true;
                 }
+                open |= if cut { !set[j] } else { !result[j] };
+                wrong |= !cut && new_void[j];
             }
         }
-        if splits || !touches {
+        if wrong || !tissue || !open {
             kept[g] = false;
             for &i in voxels {
                 result[i] = cut;
@@ -620,45 +640,44 @@ mod tests {
             .sum()
     }
 
-    #[test]
-    fn a_thin_bridge_is_cut_by_a_voxel_or_so() {
-        // A 1-voxel bar (thinner than 2 mm) closes the frame: genus 1.
-        let set = frame(4, 1, 4);
-        assert_eq!(genus([N; 3], &set, &Silent).unwrap(), 1);
-        assert_eq!(surface_genus(&set), 1);
-        let (fixed, f) = fix(&set, 2.0);
+    /// `set` has one handle, which the fix takes out by cutting (`cut`)
+    /// or plugging, and no more than `most` voxels; then a thicker
+    /// `kept` is left as it is.
+    fn one_handle_goes(set: &[bool], cut: bool, most: u64, kept: &[bool]) {
+        assert_eq!(genus([N; 3], set, &Silent).unwrap(), 1);
+        assert_eq!(surface_genus(set), 1);
+        let (fixed, f) = fix(set, 2.0);
+        let (n_cut, n_filled) = if cut { (1, 0) } else { (0, 1) };
         assert_eq!(
             (f.genus_before, f.genus_after, f.cut, f.filled),
-            (1, 0, 1, 0),
+            (1, 0, n_cut, n_filled),
             "{f:?}"
         );
-        assert_eq!(f.voxels_added, 0);
-        // One cross-section of the bar: 4 voxels (its z thickness) or so.
-        assert!(f.voxels_removed >= 1 && f.voxels_removed <= 8, "{f:?}");
+        let (changed, other) = if cut {
+            (f.voxels_removed, f.voxels_added)
+        } else {
+            (f.voxels_added, f.voxels_removed)
+        };
+        assert_eq!(other, 0, "{f:?}");
+        assert!(changed >= 1 && changed <= most, "{f:?}");
         assert_eq!(surface_genus(&fixed), 0);
         assert_eq!(pieces::pieces([N; 3], &fixed, &Silent).unwrap().count(), 1);
-        // Thicker than the size asked: kept.
-        let (same, f) = fix(&frame(4, 4, 4), 2.0);
+        let (same, f) = fix(kept, 2.0);
         assert_eq!((f.genus_before, f.genus_after), (1, 1), "{f:?}");
-        assert_eq!(same, frame(4, 4, 4));
+        assert_eq!(same, kept);
+    }
+
+    #[test]
+    fn a_thin_bridge_is_cut_by_a_voxel_or_so() {
+        // A 1-voxel bar (thinner than 2 mm) closes the frame; one
+        // cross-section of it is 4 voxels (its z thickness). A 4-voxel
+        // bar stays.
+        one_handle_goes(&frame(4, 1, 4), true, 8, &frame(4, 4, 4));
     }
 
     #[test]
     fn a_pinhole_is_plugged_and_a_wide_hole_kept() {
-        let set = frame(1, 5, 5);
-        let (fixed, f) = fix(&set, 2.0);
-        assert_eq!(
-            (f.genus_before, f.genus_after, f.cut, f.filled),
-            (1, 0, 0, 1),
-            "{f:?}"
-        );
-        assert_eq!(f.voxels_removed, 0);
-        assert!(f.voxels_added >= 1 && f.voxels_added <= 5, "{f:?}");
-        assert_eq!(surface_genus(&fixed), 0);
-        let wide = frame(6, 5, 5);
-        let (same, f) = fix(&wide, 2.0);
-        assert_eq!((f.genus_before, f.genus_after), (1, 1), "{f:?}");
-        assert_eq!(same, wide);
+        one_handle_goes(&frame(1, 5, 5), false, 5, &frame(6, 5, 5));
     }
 
     #[test]
@@ -687,6 +706,36 @@ mod tests {
     /// The fast passes (index offsets inside, bounds checks at the border)
     /// give the two-pass chamfer distance computed with bounds checks
     /// everywhere, on an uneven grid with sources at its border.
+    /// A piece the opening loses whole (a wire figure eight, genus 2) is
+    /// not deleted; a size past the grid ends; an empty region is left
+    /// empty.
+    #[test]
+    fn thin_pieces_huge_sizes_and_nothing_are_left_alone() {
+        let eight = grid_of(|x, y, z| {
+            let ring = |y0: usize| {
+                z == 10
+                    && (4..=12).contains(&x)
+                    && (y0..=y0 + 6).contains(&y)
+                    && (x == 4 || x == 12 || y == y0 || y == y0 + 6)
+            };
+            ring(3) || ring(9)
+        });
+        assert_eq!(genus([N; 3], &eight, &Silent).unwrap(), 2);
+        let (same, f) = fix(&eight, 2.0);
+        assert!(same == eight, "{f:?}");
+        // Every tunnel is narrower than a size past the grid: the frame's
+        // hole is plugged by one 4 x 4 membrane, nothing of it removed.
+        let thick = frame(4, 4, 4);
+        let (_, f) = fix(&thick, 1e12);
+        assert_eq!(
+            (f.genus_after, f.voxels_removed, f.voxels_added),
+            (0, 0, 16),
+            "{f:?}"
+        );
+        let empty = vec![false; N * N * N];
+        assert!(fix(&empty, 2.0).0 == empty);
+    }
+
     #[test]
     fn the_chamfer_passes_agree_with_checked_ones() {
         let grid = Grid::new([9, 7, 5]);

@@ -259,11 +259,11 @@ pub fn mesh(
     progress.stage("extracting the surface", volume.size[2] as u64 + 1);
     // A grey volume keeps its values where the kept voxels are the ones
     // selected (the surface is interpolated there). A voxel that changed
-    // sides (a dropped piece, a filled void, a handle's cut or plug) takes
-    // its value mirrored about the level, onto the side it is now on: the
-    // surface crosses an edge from it where it would cross one from a
-    // voxel as far on that side (a dropped piece's and a filled void's
-    // neighbours changed sides with them, so no edge from them crosses).
+    // sides (a dropped piece, a filled void, a handle's cut or plug) is
+    // set to an infinity on the side it is now on, so the surface crosses
+    // its edges half way, as a label map's (a value mirrored about the
+    // level would put the two sheets round a cut a hair apart where the
+    // bridge's values were near the level).
     let adjusted: Vec<f32>;
     let field = match opts.region {
         Region::Label(_) => surface::Field::Binary(&kept),
@@ -277,8 +277,8 @@ pub fn mesh(
                 .iter()
                 .zip(kept.iter().zip(&selected))
                 .map(|(&v, (&k, &s))| match (k, s) {
-                    (true, false) => (2.0 * level - v).max(level),
-                    (false, true) => (2.0 * level - v).min(level.next_down()),
+                    (true, false) => f32::INFINITY,
+                    (false, true) => f32::NEG_INFINITY,
                     _ => v,
                 })
                 .collect();

@@ -361,7 +361,7 @@ impl Viewer {
             self.jobs.contents = None;
             match r {
                 Ok((path, contents)) => {
-                    self.region_dialog = Some(RegionDialog::new(path, contents))
+                    self.region_dialog = Some(RegionDialog::new(path, contents, self.opts.faces))
                 }
                 Err(e) => self.error(e),
             }

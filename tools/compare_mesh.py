@@ -19,7 +19,7 @@ to about 0.17 voxel (the mesh samples' spacing) or understate it by up
 to about 0.35 (the faces' samples); "to voxels" may understate it. Time is wall-clock, each
 tool from the file to its surface.
 
-Usage: tools/compare_mesh.py [--organtex target/release/organtex]
+Usage: tools/compare_mesh.py [--organtex target/release/organtex] [--max-handle MM]
                              [--faces 50000] [--json OUT.json]
 """
 
@@ -256,13 +256,14 @@ def skimage_mc(data, level):
     return poly, seconds
 
 
-def organtex_mesh(exe, path, level, faces, out):
+def organtex_mesh(exe, path, level, faces, out, max_handle=None):
     import vtk
 
     start = time.perf_counter()
+    handle = ["--max-handle", str(max_handle)] if max_handle else []
     subprocess.run(
         [exe, "mesh", str(path), "--threshold", str(level), "--faces", str(faces),
-         "-o", str(out), "--json"],
+         "-o", str(out), "--json", *handle],
         check=True, capture_output=True,
     )
     seconds = time.perf_counter() - start
@@ -278,6 +279,8 @@ def main():
     ap.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
     ap.add_argument("--faces", type=int, default=50000)
     ap.add_argument("--json")
+    ap.add_argument("--max-handle", type=float,
+                    help="also organtex with --max-handle MM (thin handles cut or plugged)")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -287,6 +290,11 @@ def main():
             poly, t = organtex_mesh(args.organtex, path, level, args.faces, Path(tmp) / "o.ply")
             rows.append({"case": name, "tool": "organtex", "seconds": t,
                          **measure(poly, voxel_volume, from_world(affine), faces)})
+            if args.max_handle:
+                poly, t = organtex_mesh(args.organtex, path, level, args.faces, Path(tmp) / "h.ply",
+                                        args.max_handle)
+                rows.append({"case": name, "tool": f"organtex --max-handle {args.max_handle:g}",
+                             "seconds": t, **measure(poly, voxel_volume, from_world(affine), faces)})
             poly, t, to_voxels = vtk_pipeline(path, level, args.faces)
             rows.append({"case": name, "tool": "VTK (Slicer's pipeline)", "seconds": t,
                          **measure(poly, voxel_volume, to_voxels, faces)})

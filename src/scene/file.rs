@@ -88,9 +88,13 @@ pub struct Segmentation {
     pub segment: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub threshold: Option<f64>,
-    /// Taubin smoothing iterations.
+    /// Smoothing iterations.
     #[serde(default = "default_smooth")]
     pub smooth: usize,
+    /// "taubin" (default) or "sinc" (windowed sinc; `organtex mesh
+    /// --smoother`).
+    #[serde(default, skip_serializing_if = "is_taubin")]
+    pub smoother: crate::segment::Smoother,
     /// The face budget: a raw voxel surface has hundreds of thousands,
     /// more than the unwrap and the tet mesh need.
     #[serde(default = "default_segmentation_faces")]
@@ -103,6 +107,10 @@ pub struct Segmentation {
     /// --max-handle`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_handle: Option<f64>,
+}
+
+fn is_taubin(s: &crate::segment::Smoother) -> bool {
+    *s == crate::segment::Smoother::Taubin
 }
 
 fn default_smooth() -> usize {
@@ -133,6 +141,7 @@ impl Segmentation {
                 _ => None,
             },
             smooth: default_smooth(),
+            smoother: Default::default(),
             faces: default_segmentation_faces(),
             all_components: false,
             fill_voids: false,

@@ -166,9 +166,11 @@ pub enum Region {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshOptions {
     pub region: Region,
-    /// Taubin iterations (each a lambda and a mu step); 0: the raw
+    /// Smoothing iterations (Taubin: each a lambda and a mu step;
+    /// windowed sinc: each a Chebyshev term); 0: the raw
     /// marching-tetrahedra surface.
     pub smooth: usize,
+    pub smoother: Smoother,
     /// Keep every connected piece, not only the largest.
     pub all_components: bool,
     /// Fill the kept pieces' enclosed voids (default: each void is an
@@ -179,6 +181,21 @@ pub struct MeshOptions {
     pub faces: Option<usize>,
     /// Cut or plug the region's handles thinner than this, mm (`handles`).
     pub max_handle: Option<f64>,
+}
+
+/// How the staircase is smoothed away (`smooth`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Smoother {
+    /// Taubin's lambda/mu: gentle, safe on thin sheets such as the white
+    /// matter's gyri.
+    #[default]
+    Taubin,
+    /// Windowed sinc (`sinc` in a scene), as 3D Slicer smooths: much smoother and nearer the
+    /// voxels on a compact organ, but it pulls the two sides of a thin
+    /// sheet through each other (degenerate faces on the white matter).
+    #[serde(rename = "sinc")]
+    WindowedSinc,
 }
 
 /// Tangential relaxation rounds after decimating.
@@ -288,7 +305,12 @@ pub fn mesh(
     let mut mesh = surface::march(volume.size, field, progress)?;
     let kept_pieces = if opts.all_components { components } else { 1 };
     // Smoothing in voxel units (the grid's own isotropy), then to world.
-    smooth::taubin(&mut mesh, opts.smooth, progress)?;
+    match opts.smoother {
+        Smoother::Taubin => smooth::taubin(&mut mesh, opts.smooth, progress)?,
+        Smoother::WindowedSinc => {
+            smooth::windowed_sinc(&mut mesh, opts.smooth, smooth::PASS_BAND, progress)?
+        }
+    }
     for p in &mut mesh.positions {
         *p = volume.to_world.transform_point3(*p);
     }

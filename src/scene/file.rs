@@ -93,7 +93,7 @@ pub struct Segmentation {
     pub smooth: usize,
     /// "taubin" (default) or "sinc" (windowed sinc; `organtex mesh
     /// --smoother`).
-    #[serde(default, skip_serializing_if = "is_taubin")]
+    #[serde(default, skip_serializing_if = "crate::segment::Smoother::is_default")]
     pub smoother: crate::segment::Smoother,
     /// The face budget: a raw voxel surface has hundreds of thousands,
     /// more than the unwrap and the tet mesh need.
@@ -107,10 +107,6 @@ pub struct Segmentation {
     /// --max-handle`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_handle: Option<f64>,
-}
-
-fn is_taubin(s: &crate::segment::Smoother) -> bool {
-    *s == crate::segment::Smoother::Taubin
 }
 
 fn default_smooth() -> usize {

@@ -198,6 +198,13 @@ pub enum Smoother {
     WindowedSinc,
 }
 
+impl Smoother {
+    /// Taubin's, what a scene leaves unsaid.
+    pub fn is_default(&self) -> bool {
+        *self == Smoother::default()
+    }
+}
+
 /// Tangential relaxation rounds after decimating.
 const RELAX_ROUNDS: usize = 5;
 

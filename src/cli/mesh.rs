@@ -34,7 +34,8 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true)]
     threshold: Option<f64>,
     /// Smoothing iterations (--smoother): takes the voxel staircase away
-    /// without shrinking the region; 0 keeps the raw surface.
+    /// without shrinking the region (the windowed sinc from about 10);
+    /// 0 keeps the raw surface.
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     smooth: u32,
     /// Keep every piece of the region (default: the largest, by voxels,
@@ -54,10 +55,11 @@ pub struct Args {
     #[arg(long, value_parser = clap::value_parser!(u64).range(4..=1_000_000_000))]
     faces: Option<u64>,
     /// How the staircase is smoothed: taubin (lambda/mu; safe on thin
-    /// sheets such as the white matter's gyri) or sinc (windowed sinc as
-    /// 3D Slicer runs it, pass band 0.1: much smoother and nearer the
-    /// voxels on a compact organ such as the brain or a liver, but it
-    /// pulls the sides of thin sheets through each other).
+    /// sheets such as the white matter's gyri) or sinc (a windowed sinc,
+    /// the filter VTK and 3D Slicer smooth with, pass band 0.1 unmoved:
+    /// much smoother and nearer the voxels on a compact organ such as the
+    /// brain or a liver, but it pulls the sides of thin sheets through
+    /// each other; give it 10 iterations or more).
     #[arg(long, value_enum, default_value = "taubin")]
     smoother: SmootherArg,
     /// Cut or plug the region's handles thinner than this many mm before

@@ -191,7 +191,7 @@ pub enum Smoother {
     /// matter's gyri.
     #[default]
     Taubin,
-    /// Windowed sinc (`sinc` in a scene), as 3D Slicer smooths: much smoother and nearer the
+    /// Windowed sinc (`sinc` in a scene), VTK's and 3D Slicer's filter: much smoother and nearer the
     /// voxels on a compact organ, but it pulls the two sides of a thin
     /// sheet through each other (degenerate faces on the white matter).
     #[serde(rename = "sinc")]

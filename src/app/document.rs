@@ -40,7 +40,7 @@ impl Document {
         if crate::segment::contents::is_segmentation(path) {
             return Err(Error::format(
                 path,
-                "is a segmentation: say which region to mesh (Document::of_segmentation)",
+                "is a segmentation: say which region to mesh (--label, --segment or --threshold)",
             ));
         }
         known_mesh(path)?;

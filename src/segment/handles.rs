@@ -575,10 +575,6 @@ fn euler_at(grid: &Grid, b: usize, member: &impl Fn(usize) -> bool) -> i64 {
 
 /// The summed genus of the surface round `set`: sheets (pieces and voids)
 /// less the Euler characteristic of the solid.
-pub fn genus(grid_size: [usize; 3], set: &[bool], progress: &dyn Progress) -> Result<i64> {
-    genus_of(&Grid::new(grid_size), set, progress)
-}
-
 fn genus_of(grid: &Grid, set: &[bool], progress: &dyn Progress) -> Result<i64> {
     let chi: i64 = (0..grid.len())
         .into_par_iter()
@@ -644,7 +640,7 @@ mod tests {
     /// or plugging, and no more than `most` voxels; then a thicker
     /// `kept` is left as it is.
     fn one_handle_goes(set: &[bool], cut: bool, most: u64, kept: &[bool]) {
-        assert_eq!(genus([N; 3], set, &Silent).unwrap(), 1);
+        assert_eq!(genus_of(&Grid::new([N; 3]), set, &Silent).unwrap(), 1);
         assert_eq!(surface_genus(set), 1);
         let (fixed, f) = fix(set, 2.0);
         let (n_cut, n_filled) = if cut { (1, 0) } else { (0, 1) };
@@ -720,7 +716,7 @@ mod tests {
             };
             ring(3) || ring(9)
         });
-        assert_eq!(genus([N; 3], &eight, &Silent).unwrap(), 2);
+        assert_eq!(genus_of(&Grid::new([N; 3]), &eight, &Silent).unwrap(), 2);
         let (same, f) = fix(&eight, 2.0);
         assert!(same == eight, "{f:?}");
         // Every tunnel is narrower than a size past the grid: the frame's

@@ -245,7 +245,8 @@ pub fn mesh(
 ) -> Result<(TriMesh, MeshReport)> {
     let selected = select(volume, name, opts.region)?;
     let region_voxels = selected.iter().filter(|&&b| b).count() as u64;
-    let (inside, handles) = match opts.max_handle {
+    let fixed: Vec<bool>;
+    let (inside, handles): (&[bool], _) = match opts.max_handle {
         Some(mm) => {
             if !(mm.is_finite() && mm > 0.0) {
                 return Err(Error::invalid(format!(
@@ -253,18 +254,18 @@ pub fn mesh(
                 )));
             }
             let spacing = volume.voxel_volume().cbrt();
-            let (fixed, fix) =
-                handles::remove_handles(volume.size, &selected, mm, spacing, progress)?;
-            (fixed, Some(fix))
+            let fix;
+            (fixed, fix) = handles::remove_handles(volume.size, &selected, mm, spacing, progress)?;
+            (&fixed, Some(fix))
         }
-        None => (selected.clone(), None),
+        None => (&selected, None),
     };
     progress.stage("finding the region's pieces and voids", 1);
-    let found = pieces::pieces(volume.size, &inside, progress)?;
+    let found = pieces::pieces(volume.size, inside, progress)?;
     let components = found.count();
     // The largest piece by voxels, with its voids (see `pieces`).
     let mut kept: Vec<bool> = if opts.all_components {
-        inside.clone()
+        inside.to_vec()
     } else {
         let largest = found.largest().expect("select refuses an empty region");
         found.of_voxel.iter().map(|&p| p == largest).collect()

@@ -32,20 +32,7 @@ pub fn taubin(mesh: &mut TriMesh, iterations: usize, progress: &dyn Progress) ->
     for _ in 0..iterations {
         progress::check(progress)?;
         for factor in [LAMBDA, MU] {
-            let before = &mesh.positions;
-            let moved: Vec<DVec3> = (0..before.len())
-                .into_par_iter()
-                .map(|v| {
-                    let ring = &neighbours[v];
-                    if ring.is_empty() {
-                        return before[v];
-                    }
-                    let mean =
-                        ring.iter().map(|&n| before[n as usize]).sum::<DVec3>() / ring.len() as f64;
-                    before[v] + factor * (mean - before[v])
-                })
-                .collect();
-            mesh.positions = moved;
+            mesh.positions = umbrella_step(&mesh.positions, &neighbours, factor);
         }
         progress.advance(1);
     }
@@ -97,19 +84,7 @@ pub fn windowed_sinc(
     let total: f64 = (0..=n).map(weight).sum();
     let neighbours = vertex_neighbours(mesh);
     // (I - K/2) x: half way to the neighbours' mean.
-    let half_step = |x: &[DVec3]| -> Vec<DVec3> {
-        (0..x.len())
-            .into_par_iter()
-            .map(|v| {
-                let ring = &neighbours[v];
-                if ring.is_empty() {
-                    return x[v];
-                }
-                let mean = ring.iter().map(|&m| x[m as usize]).sum::<DVec3>() / ring.len() as f64;
-                0.5 * (x[v] + mean)
-            })
-            .collect()
-    };
+    let half_step = |x: &[DVec3]| umbrella_step(x, &neighbours, 0.5);
     progress.stage("smoothing", n as u64);
     let mut older = mesh.positions.clone();
     let mut old = half_step(&older);
@@ -136,6 +111,23 @@ pub fn windowed_sinc(
     }
     mesh.positions = sum.into_iter().map(|s| s / total).collect();
     Ok(())
+}
+
+/// Each vertex moved `factor` of the way to its neighbours' mean (the
+/// umbrella Laplacian step both smoothers are made of); a vertex without
+/// neighbours stays.
+fn umbrella_step(x: &[DVec3], neighbours: &[Vec<u32>], factor: f64) -> Vec<DVec3> {
+    (0..x.len())
+        .into_par_iter()
+        .map(|v| {
+            let ring = &neighbours[v];
+            if ring.is_empty() {
+                return x[v];
+            }
+            let mean = ring.iter().map(|&m| x[m as usize]).sum::<DVec3>() / ring.len() as f64;
+            x[v] + factor * (mean - x[v])
+        })
+        .collect()
 }
 
 /// Each vertex's neighbours along edges, sorted, once each.

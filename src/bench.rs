@@ -368,7 +368,7 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "bake again, one tissue changed",
             min_runs: 1,
-            what: "the default scene baked again into the same folder after its polyp's tissue changed (a different one each run): the interior kept (target <= 3 s)",
+            what: "the default scene baked again into the same folder after its polyp's tissue changed (a different one each run): the interior and the unwraps kept (target <= 3 s)",
             prepare: rebake_step,
         },
         Workload {

@@ -326,7 +326,13 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     .unwrap();
     assert_eq!(
         files_in(out.path()),
-        ["interior", "preview.png", "report.json", "scene.glb"]
+        [
+            "interior",
+            "preview.png",
+            "report.json",
+            "scene.glb",
+            "unwraps"
+        ]
     );
     let r = &baked.report;
     assert_eq!(r.mode, "layered");
@@ -1219,8 +1225,22 @@ fn a_second_bake_keeps_the_interior_when_only_a_tissue_changed() {
         "{stages:?}"
     );
     assert!(!stages.contains(&"tet mesh".to_string()), "{stages:?}");
+    // So are the unwraps (issue 38): every facet's is taken, none made.
+    assert!(stages.contains(&"unwrap reused".to_string()), "{stages:?}");
+    assert!(!stages.contains(&"unwrap".to_string()), "{stages:?}");
     let fresh = bake_into("b", &changed);
     assert!(!stage_of(&fresh).contains(&"interior reused".to_string()));
+    assert!(!stage_of(&fresh).contains(&"unwrap reused".to_string()));
+    // The facets' figures are those of a bake from scratch.
+    for (a, b) in again.report.facets.iter().zip(&fresh.report.facets) {
+        let (a, b) = (&a.facet, &b.facet);
+        assert_eq!(a.metrics, b.metrics);
+        assert_eq!(a.flattening, b.flattening);
+        assert_eq!(
+            (a.seam_edges, a.charts, a.seen),
+            (b.seam_edges, b.charts, b.seen)
+        );
+    }
     for f in files {
         assert!(
             std::fs::read(dir.path().join("a/scene").join(f)).unwrap()
@@ -1233,9 +1253,11 @@ fn a_second_bake_keeps_the_interior_when_only_a_tissue_changed() {
         fresh.report.interiors[0].tet_mesh.as_ref().unwrap().tets
     );
 
-    // The interior's own settings change: it is made again.
+    // The interior's own settings change: it is made again; the
+    // unwraps, whose inputs did not change, are still taken.
     let other = bake_into("a", &with_tet_mesh("colon-mucosa", 6.0));
     assert!(!stage_of(&other).contains(&"interior reused".to_string()));
+    assert!(stage_of(&other).contains(&"unwrap reused".to_string()));
     assert!(other.report.interiors[0].voxel_size > again.report.interiors[0].voxel_size);
 
     // A folder whose key is gone (a bake cut short) makes it again.
@@ -1243,4 +1265,20 @@ fn a_second_bake_keeps_the_interior_when_only_a_tissue_changed() {
     let remade = bake_into("a", &with_tet_mesh("colon-mucosa", 6.0));
     assert!(!stage_of(&remade).contains(&"interior reused".to_string()));
     assert!(dir.path().join("a/scene/interior/uterus.key").is_file());
+
+    // A facet's unwrap settings change: that facet is unwrapped again, the
+    // other kept.
+    let stretched = with_tet_mesh("colon-mucosa", 6.0).replace(
+        "name = \"serosa\"\n",
+        "name = \"serosa\"\nmax_stretch = 0.2\n",
+    );
+    assert_ne!(stretched, with_tet_mesh("colon-mucosa", 6.0));
+    let restretched = bake_into("a", &stretched);
+    let spans = &restretched.report.timings.stages;
+    let made: Vec<&str> = spans
+        .iter()
+        .filter(|s| s.stage == "unwrap")
+        .map(|s| s.item.as_str())
+        .collect();
+    assert_eq!(made, ["uterus/serosa"], "{spans:?}");
 }

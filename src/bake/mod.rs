@@ -19,10 +19,11 @@ use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{CancelOnly, Progress, Span, check, timed};
 use crate::scene::atlas::{self, Atlas};
-use crate::scene::build::{BakedScene, FacetReport, build_scene};
+use crate::scene::build::{BakedScene, FacetReport, build_scene_keeping};
 use crate::scene::contrast::{Colours, Contrast, contrast};
 use crate::scene::draw::DrawList;
 use crate::scene::interior::InteriorLine;
+use crate::scene::kept_unwrap;
 use crate::scene::{file, gltf};
 
 mod interior;
@@ -147,7 +148,7 @@ pub fn bake(
     }
     let start = Instant::now();
     let spec = file::load(scene)?;
-    let baked = build_scene(&spec, opts.atlas.is_some(), progress)?;
+    let baked = build_scene_keeping(&spec, opts.atlas.is_some(), Some(out), progress)?;
     let build_s = start.elapsed().as_secs_f64();
 
     // The interiors (block, tets, LST) need nothing of the surface's
@@ -242,6 +243,20 @@ pub fn bake(
         },
     };
 
+    // Each facet's unwrap, kept for the next bake here: those made now
+    // (the reused ones are in place already).
+    let mut kept_paths = Vec::new();
+    let mut kept = Vec::new();
+    for (n, node) in baked.nodes.iter().enumerate() {
+        for facet in &node.facets {
+            let path = kept_unwrap::path(out, n, facet.piece.facet);
+            if !facet.unwrap_reused {
+                kept.push((path.clone(), facet.kept_unwrap()));
+            }
+            kept_paths.push(path);
+        }
+    }
+
     // The files, the interiors' (tens of MB for an LST) the larger part.
     progress.stage("writing", 2);
     check(progress)?;
@@ -261,6 +276,10 @@ pub fn bake(
     }
     progress.advance(1);
     interior::write(&interiors, out)?;
+    for (path, unwrap) in &kept {
+        kept_unwrap::save(path, unwrap)?;
+    }
+    kept_unwrap::prune(out, &kept_paths)?;
     progress.advance(1);
     Ok(baked)
 }

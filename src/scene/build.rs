@@ -14,6 +14,7 @@ use serde::Serialize;
 
 use super::composite::{Band, Compositor, Layer, Look, Overlay, Texture, Transform};
 use super::file::{FacetSettings, MeshSpec, NodeSpec, SceneSpec, check_tissues};
+use super::kept_unwrap::{self, KeptUnwrap};
 use super::uterus;
 use crate::blend::overlap::{FacetPiece, facet_pieces};
 use crate::blend::seam::{BandFace, seam_bands};
@@ -37,6 +38,25 @@ pub struct BakedFacet {
     /// Per own face: whether a viewpoint sees any of its corners.
     pub seen: Vec<bool>,
     pub report: FacetReport,
+    /// What its unwrap was made from (`kept_unwrap::key`), and whether it
+    /// was taken from an earlier bake's folder rather than made.
+    pub unwrap_key: String,
+    pub unwrap_reused: bool,
+}
+
+impl BakedFacet {
+    /// What a bake keeps of its unwrap for the next.
+    pub fn kept_unwrap(&self) -> KeptUnwrap {
+        let uvs = self.piece.mesh.uvs.as_ref().expect("unwrapped");
+        KeptUnwrap {
+            key: self.unwrap_key.clone(),
+            coords: uvs.coords.iter().map(|c| c.to_array()).collect(),
+            triangles: uvs.triangles.clone(),
+            seam_edges: self.report.seam_edges,
+            metrics: self.report.metrics.clone(),
+            flattening: self.report.flattening.clone(),
+        }
+    }
 }
 
 /// A node with its baked facets and what every face shows.
@@ -137,6 +157,18 @@ pub fn build_scene(
     for_atlases: bool,
     progress: &dyn Progress,
 ) -> Result<BakedScene> {
+    build_scene_keeping(spec, for_atlases, None, progress)
+}
+
+/// `build_scene`, taking each facet's unwrap from `kept_in` (a bake's
+/// output folder) where one made from the same inputs was kept there
+/// (`kept_unwrap`).
+pub fn build_scene_keeping(
+    spec: &SceneSpec,
+    for_atlases: bool,
+    kept_in: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<BakedScene> {
     let database = Database::open(&spec.database)?;
     let ids: Vec<String> = database.tissues.iter().map(|t| t.id.clone()).collect();
     check_tissues(spec, &ids)?;
@@ -145,13 +177,14 @@ pub fn build_scene(
         ensure_tissues(spec, &database, progress)
     })?;
     let mut nodes = Vec::new();
-    for node in &spec.nodes {
+    for (node_index, node) in spec.nodes.iter().enumerate() {
         check(progress)?;
         nodes.push(build_node(
             spec,
-            node,
+            (node_index, node),
             &tissues,
             for_atlases,
+            kept_in,
             progress,
             &mut spans,
         )?);
@@ -320,9 +353,10 @@ pub fn match_facets(node: &NodeSpec, mesh: &TriMesh) -> Result<Vec<FacetSettings
 
 fn build_node(
     spec: &SceneSpec,
-    node: &NodeSpec,
+    (node_index, node): (usize, &NodeSpec),
     tissues: &Tissues,
     for_atlases: bool,
+    kept_in: Option<&Path>,
     progress: &dyn Progress,
     spans: &mut Vec<Span>,
 ) -> Result<BakedNode> {
@@ -364,17 +398,59 @@ fn build_node(
             };
             opts.seams.max_stretch = facet_settings.max_stretch;
             opts.seams.max_conformal = facet_settings.max_conformal;
-            let unwrapped = unwrap_seen(&piece.mesh, piece_topo, piece_seen, &opts, &quiet)?;
+            // A bake into a folder that kept this facet's unwrap, made from
+            // the same piece, views and settings, takes it (`kept_unwrap`).
+            let unwrap_key = kept_unwrap::key(&piece.mesh, &piece_seen, &opts);
+            let kept = kept_in
+                .and_then(|dir| {
+                    kept_unwrap::load(
+                        &kept_unwrap::path(dir, node_index, piece.facet),
+                        &unwrap_key,
+                    )
+                })
+                .filter(|kept| kept.triangles.len() == piece.mesh.num_faces());
+            let unwrap_reused = kept.is_some();
             let mut piece = piece;
-            piece.mesh = unwrapped.mesh;
-            let band = seam_bands(&piece.mesh, &unwrapped.topology, spec.bake.seam_band);
-            let m = unwrapped.report.metrics.clone();
+            let (topology, vertex_seen, seam_edges, m, flattening) = match kept {
+                Some(kept) => {
+                    piece.mesh.uvs = Some(kept.uvs());
+                    let KeptUnwrap {
+                        seam_edges,
+                        metrics,
+                        flattening,
+                        ..
+                    } = kept;
+                    (
+                        piece_topo,
+                        piece_seen.vertex,
+                        seam_edges,
+                        metrics,
+                        flattening,
+                    )
+                }
+                None => {
+                    let unwrapped =
+                        unwrap_seen(&piece.mesh, piece_topo, piece_seen, &opts, &quiet)?;
+                    piece.mesh = unwrapped.mesh;
+                    let flattening = unwrapped
+                        .report
+                        .pieces
+                        .iter()
+                        .flat_map(|p| p.flattening.clone())
+                        .collect();
+                    (
+                        unwrapped.topology,
+                        unwrapped.visibility.vertex,
+                        unwrapped.seams.len(),
+                        unwrapped.report.metrics,
+                        flattening,
+                    )
+                }
+            };
+            let band = seam_bands(&piece.mesh, &topology, spec.bake.seam_band);
             let seen: Vec<bool> = piece.mesh.triangles[..piece.own]
                 .iter()
-                .map(|t| {
-                    t.iter()
-                        .any(|&v| unwrapped.visibility.vertex[v as usize] > 0.0)
-                })
+                .map(|t| t.iter().any(|&v| vertex_seen[v as usize] > 0.0))
                 .collect();
             let (mut seen_area, mut area) = (0.0, 0.0);
             for (f, &s) in seen.iter().enumerate() {
@@ -405,14 +481,9 @@ fn build_node(
                     ring_faces: piece.mesh.num_faces() - piece.own,
                     band_faces: band.len(),
                     charts: m.charts,
-                    seam_edges: unwrapped.seams.len(),
+                    seam_edges,
                     seam_length: m.seam_length,
-                    flattening: unwrapped
-                        .report
-                        .pieces
-                        .iter()
-                        .flat_map(|p| p.flattening.clone())
-                        .collect(),
+                    flattening,
                     metrics: m,
                     atlas_overlaps,
                     seen: seen_area / area.max(1e-300),
@@ -422,6 +493,8 @@ fn build_node(
                 piece,
                 band,
                 seen,
+                unwrap_key,
+                unwrap_reused,
             })
         })
         .collect::<Result<_>>()?;
@@ -433,7 +506,12 @@ fn build_node(
     });
     for f in &facets {
         spans.push(Span {
-            stage: "unwrap".into(),
+            stage: if f.unwrap_reused {
+                "unwrap reused"
+            } else {
+                "unwrap"
+            }
+            .into(),
             item: format!("{}/{}", f.report.node, f.report.facet),
             seconds: f.report.unwrap_s,
             parallel: true,

@@ -9,5 +9,6 @@ pub mod draw;
 pub mod file;
 pub mod gltf;
 pub mod interior;
+pub mod kept_unwrap;
 pub mod manifest;
 pub mod uterus;

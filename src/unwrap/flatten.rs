@@ -9,7 +9,7 @@
 //! the chart, area balancing follows (`balance`).
 
 use glam::DVec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::abf::{self, AbfOptions};
 use super::balance::balance;
@@ -21,7 +21,7 @@ use crate::error::Result;
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh};
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "snake_case")]
 pub enum Method {
     AbfPlusPlus {

@@ -18,12 +18,12 @@
 //!   sqrt(total area).
 
 use glam::{DVec2, DVec3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::mesh::dsu::DisjointSets;
 use crate::mesh::{EdgeId, Topology, TriMesh, UvLayer};
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct UvMetrics {
     pub charts: usize,
     pub flips: usize,

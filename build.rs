@@ -1,6 +1,8 @@
 //! Embeds a digest of the library's source as ORGANTEX_SOURCE_DIGEST, so
-//! a bake reuses interiors (tet meshes, lapped solid textures) only when
-//! the code that would make them again is the code that made them.
+//! a bake reuses interiors (tet meshes, lapped solid textures) and unwraps
+//! only when the code that would make them again is the code that made
+//! them: its files, the locked dependencies (Cargo.lock: faer factors the
+//! unwraps' systems), the compiler and the target.
 
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
@@ -20,6 +22,22 @@ fn main() {
         std::fs::read(file)
             .expect("readable source")
             .hash(&mut hasher);
+    }
+    // The workspace's lock file, beside the library's manifest (the
+    // workspace's root, also when python/ or capi/ build it).
+    let lock = src.with_file_name("Cargo.lock");
+    println!("cargo:rerun-if-changed={}", lock.display());
+    if let Ok(bytes) = std::fs::read(&lock) {
+        bytes.hash(&mut hasher);
+    }
+    for var in ["RUSTC", "TARGET", "PROFILE"] {
+        std::env::var(var).unwrap_or_default().hash(&mut hasher);
+    }
+    if let Ok(out) = std::process::Command::new(std::env::var("RUSTC").unwrap_or("rustc".into()))
+        .arg("--version")
+        .output()
+    {
+        out.stdout.hash(&mut hasher);
     }
     println!(
         "cargo:rustc-env=ORGANTEX_SOURCE_DIGEST={:016x}",

@@ -168,7 +168,7 @@ def tetra(vertices, faces, *, edge_length: Optional[float] = None, cells: Option
 def bake(scene_path: Path_, out_dir: Path_, atlas: Optional[int] = None,
          progress: Progress = None) -> dict:
     """Bake a scene file into ``out_dir`` (scene.glb, report.json,
-    preview.png, interior/), exactly as ``organtex bake`` does: the same
+    preview.png, interior/, unwraps/), exactly as ``organtex bake`` does: the same
     scene and seed give the same bytes. Returns report.json as a dict.
     Files already in ``out_dir`` are replaced only when the bake
     succeeds."""

@@ -7,7 +7,7 @@
 
 Each scene bakes into DIR/NAME/ (NAME: its file name without .toml), as
 ``organtex bake`` writes it (scene.glb, report.json, preview.png,
-interior/), atomically: a folder holds a whole bake or its previous one,
+interior/, unwraps/), atomically: a folder holds a whole bake or its previous one,
 never half of one. Results stream in as tasks finish, with a progress bar.
 A scene that fails is reported with its error while the others go on; a
 task whose worker process dies (killed, out of memory, node lost) is

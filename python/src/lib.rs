@@ -409,7 +409,7 @@ impl PyMorph {
 }
 
 /// Bake a scene into `out_dir` (scene.glb, report.json, preview.png,
-/// interiors): the report as JSON.
+/// interiors, kept unwraps): the report as JSON.
 #[pyfunction]
 #[pyo3(signature = (scene, out_dir, atlas=None, progress=None))]
 fn bake(

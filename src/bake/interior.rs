@@ -490,16 +490,7 @@ fn interior_key(scene: &BakedScene, k: usize, texture: &Path) -> Result<String> 
     digest.feed(&(scene.spec.bake.interior_voxels as u64).to_le_bytes());
     digest.feed(&(k as u64).to_le_bytes());
     let mesh = &scene.nodes[k].mesh;
-    for p in &mesh.positions {
-        for c in p.to_array() {
-            digest.feed(&c.to_le_bytes());
-        }
-    }
-    for t in &mesh.triangles {
-        for v in t {
-            digest.feed(&v.to_le_bytes());
-        }
-    }
+    mesh.feed_geometry(&mut digest);
     if let Some(f) = &mesh.facets {
         for name in &f.names {
             digest.feed(name.as_bytes());

@@ -22,9 +22,10 @@ pub struct Args {
     /// Which scene of --manifest to bake (from 0).
     #[arg(long, value_name = "N", requires = "manifest")]
     index: Option<usize>,
-    /// Folder for scene.glb, report.json and preview.png (created if
-    /// missing; files already there are replaced only when the bake
-    /// succeeds).
+    /// Folder for scene.glb, report.json, preview.png, interior/ and
+    /// unwraps/ (created if missing; files already there are replaced only
+    /// when the bake succeeds; interiors and unwraps a bake there made from
+    /// the same inputs are taken, not made again).
     #[arg(short, long, value_name = "DIR")]
     output: PathBuf,
     /// Bake each facet into one texture with the seam blend, facet blend

@@ -40,7 +40,9 @@ pub struct Cli {
 enum Command {
     /// Bake a scene (scenes/README.md): every facet cut, flattened and
     /// textured with its tissue, seams and facet borders blended; writes
-    /// DIR/scene.glb, DIR/report.json and DIR/preview.png.
+    /// DIR/scene.glb, DIR/report.json and DIR/preview.png, and keeps the
+    /// interiors and unwraps (DIR/interior/, DIR/unwraps/) that a next
+    /// bake into DIR takes where their inputs did not change.
     Bake(bake::Args),
     /// Describe a mesh: counts, facets, components, genus, boundary loops,
     /// defects, bounds, area, volume and curvature statistics.

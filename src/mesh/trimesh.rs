@@ -38,6 +38,21 @@ pub struct UvLayer {
 }
 
 impl TriMesh {
+    /// Its positions and triangles (their bits) into `digest`, for change
+    /// detection of what is made from them.
+    pub fn feed_geometry(&self, digest: &mut crate::digest::Digest) {
+        for p in &self.positions {
+            for c in p.to_array() {
+                digest.feed(&c.to_le_bytes());
+            }
+        }
+        for t in &self.triangles {
+            for v in t {
+                digest.feed(&v.to_le_bytes());
+            }
+        }
+    }
+
     pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
         TriMesh {
             positions,

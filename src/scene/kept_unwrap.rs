@@ -66,16 +66,7 @@ pub fn key(mesh: &TriMesh, seen: &Visibility, opts: &UnwrapOptions) -> String {
     let mut digest = Digest::default();
     digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
     digest.feed(format!("{opts:?}").as_bytes());
-    for p in &mesh.positions {
-        for c in p.to_array() {
-            digest.feed(&c.to_le_bytes());
-        }
-    }
-    for t in &mesh.triangles {
-        for v in t {
-            digest.feed(&v.to_le_bytes());
-        }
-    }
+    mesh.feed_geometry(&mut digest);
     for x in seen.vertex.iter().chain(&seen.edge) {
         digest.feed(&x.to_le_bytes());
     }
@@ -83,11 +74,13 @@ pub fn key(mesh: &TriMesh, seen: &Visibility, opts: &UnwrapOptions) -> String {
     digest.hex()
 }
 
-/// The unwrap kept at `path` if it was made from `key`.
+/// The unwrap kept at `path` if it was made from `key` (and its uv
+/// triangles name uvs it holds: a file edited by hand is not taken).
 pub fn load(path: &Path, key: &str) -> Option<KeptUnwrap> {
     let text = std::fs::read(path).ok()?;
     let kept: KeptUnwrap = serde_json::from_slice(&text).ok()?;
-    (kept.key == key).then_some(kept)
+    let n = kept.coords.len();
+    (kept.key == key && kept.triangles.iter().flatten().all(|&i| (i as usize) < n)).then_some(kept)
 }
 
 /// Keep `kept` at `path` (written whole or not at all).
@@ -101,15 +94,26 @@ pub fn save(path: &Path, kept: &KeptUnwrap) -> Result<()> {
 }
 
 /// Remove the kept unwraps under `dir` that are not among `current` (a
-/// facet or node gone from the scene).
+/// facet or node gone from the scene): files named as `path` names them
+/// only, so nothing else a user put there goes.
 pub fn prune(dir: &Path, current: &[PathBuf]) -> Result<()> {
     let folder = dir.join(FOLDER);
     let Ok(entries) = std::fs::read_dir(&folder) else {
         return Ok(());
     };
+    let ours = |name: &str| {
+        name.strip_suffix(".json")
+            .and_then(|stem| stem.split_once('-'))
+            .is_some_and(|(node, facet)| {
+                [node, facet]
+                    .iter()
+                    .all(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+            })
+    };
     for entry in entries.flatten() {
         let p = entry.path();
-        if p.extension().is_some_and(|e| e == "json") && !current.contains(&p) {
+        let named = p.file_name().and_then(|n| n.to_str()).is_some_and(ours);
+        if named && !current.contains(&p) {
             std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
         }
     }
@@ -157,12 +161,19 @@ mod tests {
             assert_eq!(a.to_bits(), b.to_bits());
         }
         assert!(load(&p, "k2").is_none());
+        // A uv index past the uvs: not taken.
+        let mut broken = kept.clone();
+        broken.triangles[0][2] = 2;
+        save(&p, &broken).unwrap();
+        assert!(load(&p, "k1").is_none());
         std::fs::write(&p, b"{\"key\": \"k1\", ").unwrap();
         assert!(load(&p, "k1").is_none());
-        // Pruning keeps the current files only.
+        // Pruning keeps the current files, and files it did not name.
         let other = path(dir.path(), 1, 0);
         save(&other, &kept).unwrap();
+        let users = dir.path().join(FOLDER).join("notes.json");
+        std::fs::write(&users, b"{}").unwrap();
         prune(dir.path(), std::slice::from_ref(&p)).unwrap();
-        assert!(p.is_file() && !other.exists());
+        assert!(p.is_file() && !other.exists() && users.is_file());
     }
 }

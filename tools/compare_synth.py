@@ -12,6 +12,8 @@ with their default settings, once per seed:
   - any IMAGE given, whole;
   - with --textures, the non-tissue test textures (gravel, brick, grass),
     128-pixel centre crops to 256.
+--sizes N ...: the database entries and untuned photographs at each of
+these output sides instead (issue 38 asks for 128 and 256).
 Each run is timed as a whole process (load, synthesis, save). Quality is
 measured the same way for both (`organtex synth-quality`, with the mask):
 coherence and completeness, lower is better; seam, 1 is seamless. The
@@ -22,7 +24,7 @@ Embark's, at most 0.5x its time, seam at most 1.15. --check exits 1 when a
 case misses one.
 
 Usage: tools/compare_synth.py [--seeds 3] [--only ID ...] [--textures]
-                              [--json OUT] [--check] [IMAGE ...]
+                              [--sizes N ...] [--json OUT] [--check] [IMAGE ...]
 Embark's CLI is installed into target/embark with `cargo install --locked
 texture-synthesis-cli` when it is not on the PATH (a few minutes, once).
 """
@@ -139,6 +141,9 @@ def main():
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--only", nargs="*", default=[], help="database entry ids or untuned image stems to run")
     parser.add_argument("--textures", action="store_true")
+    parser.add_argument("--sizes", type=int, nargs="+",
+                        help="output sides for the database entries and untuned photographs "
+                             "(default: each entry's own width, 512 for the photographs)")
     parser.add_argument("--json", type=Path)
     parser.add_argument("--check", action="store_true")
     parser.add_argument("--organtex", default=str(ROOT / "target" / "release" / "organtex"))
@@ -152,13 +157,15 @@ def main():
         cases += [(p.stem, p, None, OUT_SIDE) for p in sorted(UNTUNED.glob("*.png"))
                   if not args.only or p.stem in args.only]
         cases += [(p.stem, p, None, OUT_SIDE) for p in args.images]
+        if args.sizes:
+            cases = [(name, ex, mask, size) for size in args.sizes for (name, ex, mask, _) in cases]
         if args.textures:
             for name in ("gravel", "brick", "grass"):
                 crop = tmp / f"{name}128.png"
                 centre_crop(TEXTURES / f"{name}.png", 128, crop)
                 cases.append((name, crop, None, 256))
         for case in cases:
-            workdir = tmp / f"run-{case[0]}"
+            workdir = tmp / f"run-{case[0]}-{case[3]}"
             workdir.mkdir()
             exemplar = workdir / "exemplar.png"
             shutil.copy(case[1], exemplar)

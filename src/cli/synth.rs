@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     iterations: usize,
     /// Pyramid levels (default: down to an exemplar of about 16 pixels a
-    /// side, an output of 8).
+    /// side, an output of 32).
     #[arg(long, value_parser = levels_in_range)]
     levels: Option<usize>,
     /// Side of the square neighbourhood compared (odd).

@@ -45,7 +45,7 @@
 //! the coarsest exemplar is about 16 pixels a side, where one 7 x 7
 //! neighbourhood sees a good part of it, so the layout (shading, where the
 //! sparse features lie) is decided coherently there; the output stops at
-//! 8 pixels a side.
+//! 32 pixels a side.
 
 use rayon::prelude::*;
 
@@ -64,7 +64,7 @@ pub struct SynthOptions {
     /// M: iterations per pixel and level.
     pub iterations: usize,
     /// Pyramid levels; `None` picks as many as keep the coarsest exemplar at
-    /// least 16 pixels wide and the output 8.
+    /// least 16 pixels wide and the output 32.
     pub levels: Option<usize>,
     /// K: side of the square neighbourhood (odd).
     pub neighbourhood: usize,
@@ -190,15 +190,9 @@ pub const MAX_LEVELS: usize = 16;
 /// Smallest side of the coarsest exemplar and output that the default
 /// pyramid goes down to (module doc: "Pyramid depth"). 32 for both left
 /// the database's 90 to 340 pixel crops two or three levels, and the fine
-/// levels had to place features they could not see whole. The output's
-/// bound then still cut outputs smaller than twice the exemplar short
-/// (issue 38, compare_synth.py --sizes 128, medians of 3 seeds): at 128
-/// pixels, three levels left coherence at 1.44 on the colonic mucosa,
-/// 4.72 on the IHC glands and 9.0 on the crypts, against Embark's 0.76,
-/// 2.85 and 4.78; five (the output down to 8 pixels, the exemplar still
-/// to about 16) give 0.46-0.55, 1.1-2.0 and 2.1-2.9.
+/// levels had to place features they could not see whole.
 const COARSEST_EXEMPLAR: usize = 16;
-const COARSEST_OUTPUT: usize = 8;
+const COARSEST_OUTPUT: usize = 32;
 
 /// Exemplar pyramid, finest first: as many levels as asked, or (by
 /// default) while the next exemplar keeps `COARSEST_EXEMPLAR` pixels a side

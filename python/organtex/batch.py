@@ -7,8 +7,11 @@
 
 Each scene bakes into DIR/NAME/ (NAME: its file name without .toml), as
 ``organtex bake`` writes it (scene.glb, report.json, preview.png,
-interior/, unwraps/), atomically: a folder holds a whole bake or its previous one,
-never half of one. Results stream in as tasks finish, with a progress bar.
+interior/, unwraps/), atomically: a folder holds a whole bake or its
+previous one, never half of one. A scene baked again starts from copies
+of the interiors and unwraps its previous bake kept, so after a tissue
+change only the textures are made again, as with ``organtex bake`` into
+the same folder. Results stream in as tasks finish, with a progress bar.
 A scene that fails is reported with its error while the others go on; a
 task whose worker process dies (killed, out of memory, node lost) is
 retried up to --retries times by Ray. A scene whose DIR/NAME/report.json
@@ -107,6 +110,7 @@ def bake_one(scene: str, out_root: str, atlas, force: bool) -> dict:
     # none) and a staging folder the retry clears.
     staging = Path(out_root) / f".{name}.staging"
     shutil.rmtree(staging, ignore_errors=True)
+    _seed(out, staging)
     start = time.monotonic()
     try:
         report = bake(scene_path, staging, atlas=atlas)
@@ -120,6 +124,18 @@ def bake_one(scene: str, out_root: str, atlas, force: bool) -> dict:
         running.unlink(missing_ok=True)
     return {**result, "status": "ok", "seconds": time.monotonic() - start,
             "figures": figures(report)}
+
+
+def _seed(out: Path, staging: Path) -> None:
+    """Give the staging folder copies of the previous bake's kept interiors
+    and unwraps, so a bake after a tissue change takes them as ``organtex
+    bake`` into the same folder does (each carries the digest of what it
+    was made from; the bake checks it). Copies, not hard links: a morph's
+    sections are copied over in place, which would write through a link
+    into the previous bake."""
+    for kept in ("interior", "unwraps"):
+        if (out / kept).is_dir():
+            shutil.copytree(out / kept, staging / kept)
 
 
 def _replace(staging: Path, out: Path) -> None:

@@ -94,3 +94,25 @@ def test_a_worker_killed_mid_bake_is_retried_and_the_batch_completes(cluster, ro
     # file, only the whole bake.
     assert sorted(p.name for p in out.iterdir()) == ["hysteroscopy_myomas", "summary.json"]
     assert not list((out / "hysteroscopy_myomas").rglob("*.part"))
+
+
+def test_a_batch_rebake_after_a_tissue_change_takes_the_kept_unwraps(root, tmp_path):
+    """A scene baked again by the batch, after its tissue changed, takes
+    the unwraps its previous bake kept (as `organtex bake` into the same
+    folder does), and its files are those of a bake from scratch."""
+    text = (root / "scenes" / "bunny.toml").read_text().replace(
+        '"../tests/data/bunny.obj"', json.dumps(str(root / "tests" / "data" / "bunny.obj")))
+    scene = tmp_path / "bunny.toml"
+    scene.write_text(text)
+    out, fresh = tmp_path / "out", tmp_path / "fresh"
+    first = batch.bake_one(str(scene), str(out), None, True)
+    assert first["status"] == "ok", first
+    scene.write_text(text.replace('texture = "fundus-tissue"', 'texture = "colon-mucosa"'))
+    again = batch.bake_one(str(scene), str(out), None, True)
+    assert again["status"] == "ok", again
+    stages = [s["stage"] for s in json.loads((out / "bunny" / "report.json").read_text())["timings"]["stages"]]
+    assert "unwrap reused" in stages and "unwrap" not in stages, stages
+    assert batch.bake_one(str(scene), str(fresh), None, True)["status"] == "ok"
+    assert (out / "bunny" / "scene.glb").read_bytes() == (fresh / "bunny" / "scene.glb").read_bytes()
+    # The previous bake's folder was replaced whole: no staging left.
+    assert not list(out.glob(".*"))

@@ -155,6 +155,10 @@ def _node_id():
     """The Ray node running this task (None outside Ray)."""
     try:
         import ray
+        # Asked outside Ray, the runtime context would start Ray, or join a
+        # cluster it finds running on this machine.
+        if not ray.is_initialized():
+            return None
         return ray.get_runtime_context().get_node_id()
     except Exception:
         return None

@@ -31,7 +31,7 @@ pub struct Facets {
 
 /// Texture coordinates with their own indexing: `triangles[f][i]` is the uv of
 /// corner `i` of face `f`.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UvLayer {
     pub coords: Vec<DVec2>,
     pub triangles: Vec<[u32; 3]>,

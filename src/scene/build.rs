@@ -47,11 +47,9 @@ pub struct BakedFacet {
 impl BakedFacet {
     /// What a bake keeps of its unwrap for the next.
     pub fn kept_unwrap(&self) -> KeptUnwrap {
-        let uvs = self.piece.mesh.uvs.as_ref().expect("unwrapped");
         KeptUnwrap {
             key: self.unwrap_key.clone(),
-            coords: uvs.coords.iter().map(|c| c.to_array()).collect(),
-            triangles: uvs.triangles.clone(),
+            uvs: self.piece.mesh.uvs.clone().expect("unwrapped"),
             seam_edges: self.report.seam_edges,
             metrics: self.report.metrics.clone(),
             flattening: self.report.flattening.clone(),
@@ -401,25 +399,25 @@ fn build_node(
             // A bake into a folder that kept this facet's unwrap, made from
             // the same piece, views and settings, takes it (`kept_unwrap`).
             let unwrap_key = kept_unwrap::key(&piece.mesh, &piece_seen, &opts);
-            let kept = kept_in
-                .and_then(|dir| {
-                    kept_unwrap::load(
-                        &kept_unwrap::path(dir, node_index, piece.facet),
-                        &unwrap_key,
-                    )
-                })
-                .filter(|kept| kept.triangles.len() == piece.mesh.num_faces());
+            let kept = kept_in.and_then(|dir| {
+                kept_unwrap::load(
+                    &kept_unwrap::path(dir, node_index, piece.facet),
+                    &unwrap_key,
+                    piece.mesh.num_faces(),
+                )
+            });
             let unwrap_reused = kept.is_some();
             let mut piece = piece;
             let (topology, vertex_seen, seam_edges, m, flattening) = match kept {
                 Some(kept) => {
-                    piece.mesh.uvs = Some(kept.uvs());
                     let KeptUnwrap {
+                        uvs,
                         seam_edges,
                         metrics,
                         flattening,
                         ..
                     } = kept;
+                    piece.mesh.uvs = Some(uvs);
                     (
                         piece_topo,
                         piece_seen.vertex,

@@ -32,24 +32,10 @@ pub const FOLDER: &str = "unwraps";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct KeptUnwrap {
     pub key: String,
-    pub coords: Vec<[f64; 2]>,
-    pub triangles: Vec<[u32; 3]>,
+    pub uvs: UvLayer,
     pub seam_edges: usize,
     pub metrics: UvMetrics,
     pub flattening: Vec<Method>,
-}
-
-impl KeptUnwrap {
-    pub fn uvs(&self) -> UvLayer {
-        UvLayer {
-            coords: self
-                .coords
-                .iter()
-                .map(|&c| glam::DVec2::from_array(c))
-                .collect(),
-            triangles: self.triangles.clone(),
-        }
-    }
 }
 
 /// The file of node `node`'s facet `facet` under `dir` (the output
@@ -74,13 +60,20 @@ pub fn key(mesh: &TriMesh, seen: &Visibility, opts: &UnwrapOptions) -> String {
     digest.hex()
 }
 
-/// The unwrap kept at `path` if it was made from `key` (and its uv
-/// triangles name uvs it holds: a file edited by hand is not taken).
-pub fn load(path: &Path, key: &str) -> Option<KeptUnwrap> {
+/// The unwrap kept at `path` if it was made from `key` and fits a piece
+/// of `faces` faces (a uv triangle each, naming uvs it holds: a file
+/// edited by hand is not taken).
+pub fn load(path: &Path, key: &str, faces: usize) -> Option<KeptUnwrap> {
     let text = std::fs::read(path).ok()?;
     let kept: KeptUnwrap = serde_json::from_slice(&text).ok()?;
-    let n = kept.coords.len();
-    (kept.key == key && kept.triangles.iter().flatten().all(|&i| (i as usize) < n)).then_some(kept)
+    let uvs = &kept.uvs;
+    let fits = uvs.triangles.len() == faces
+        && uvs
+            .triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < uvs.coords.len());
+    (kept.key == key && fits).then_some(kept)
 }
 
 /// Keep `kept` at `path` (written whole or not at all).
@@ -132,8 +125,13 @@ mod tests {
         let kept = KeptUnwrap {
             key: "k1".into(),
             // Floats whose shortest decimal form a lax parser misreads.
-            coords: vec![[0.1 + 0.2, 1.0 / 3.0], [2.225073858507201e-308, 0.7]],
-            triangles: vec![[0, 1, 0]],
+            uvs: UvLayer {
+                coords: vec![
+                    glam::DVec2::new(0.1 + 0.2, 1.0 / 3.0),
+                    glam::DVec2::new(2.225073858507201e-308, 0.7),
+                ],
+                triangles: vec![[0, 1, 0]],
+            },
             seam_edges: 3,
             metrics: UvMetrics {
                 charts: 1,
@@ -150,24 +148,23 @@ mod tests {
         };
         let p = path(dir.path(), 0, 2);
         save(&p, &kept).unwrap();
-        let back = load(&p, "k1").unwrap();
+        let back = load(&p, "k1", 1).unwrap();
         assert_eq!(back, kept);
-        for (a, b) in back
-            .coords
-            .iter()
-            .flatten()
-            .zip(kept.coords.iter().flatten())
-        {
-            assert_eq!(a.to_bits(), b.to_bits());
+        for (a, b) in back.uvs.coords.iter().zip(&kept.uvs.coords) {
+            assert_eq!(
+                a.to_array().map(f64::to_bits),
+                b.to_array().map(f64::to_bits)
+            );
         }
-        assert!(load(&p, "k2").is_none());
-        // A uv index past the uvs: not taken.
+        assert!(load(&p, "k2", 1).is_none());
+        // Another piece's face count, or a uv index past the uvs: not taken.
+        assert!(load(&p, "k1", 2).is_none());
         let mut broken = kept.clone();
-        broken.triangles[0][2] = 2;
+        broken.uvs.triangles[0][2] = 2;
         save(&p, &broken).unwrap();
-        assert!(load(&p, "k1").is_none());
+        assert!(load(&p, "k1", 1).is_none());
         std::fs::write(&p, b"{\"key\": \"k1\", ").unwrap();
-        assert!(load(&p, "k1").is_none());
+        assert!(load(&p, "k1", 1).is_none());
         // Pruning keeps the current files, and files it did not name.
         let other = path(dir.path(), 1, 0);
         save(&other, &kept).unwrap();

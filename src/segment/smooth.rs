@@ -54,8 +54,8 @@ pub const PASS_BAND: f64 = 0.1;
 /// VTK, the cutoff is not moved to give the pass band a gain of 1: at 20
 /// iterations the gain is 0.5 at the pass band and 0.8 at half of it
 /// (VTK's: 1.0 at both), so it smooths harder than VTK at the same pass
-/// band. Fewer than about 10 iterations make a plain shrinking filter. The same bytes on any thread count: each
-/// step reads only the last two.
+/// band. Fewer than about 10 iterations make a plain shrinking filter.
+/// The same bytes on any thread count: each step reads only the last two.
 pub fn windowed_sinc(
     mesh: &mut TriMesh,
     iterations: usize,

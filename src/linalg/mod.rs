@@ -28,7 +28,9 @@ use crate::error::{Error, Result};
 pub struct SpdPattern {
     n: usize,
     symbolic: SymbolicSparseColMat<usize>,
-    argsort: Argsort<usize>,
+    /// Where each given value goes, when the positions were not given in
+    /// column order (`new`); `None` when they were (`from_columns`).
+    argsort: Option<Argsort<usize>>,
     llt: SymbolicLlt<usize>,
     entries: usize,
 }
@@ -53,9 +55,35 @@ impl SpdPattern {
         Ok(SpdPattern {
             n,
             symbolic,
-            argsort,
+            argsort: Some(argsort),
             llt,
             entries: positions.len(),
+        })
+    }
+
+    /// The pattern whose column `j` holds the rows `rows[col_start[j]..
+    /// col_start[j + 1]]` (all `>= j`, each once, in any order): values
+    /// are then given in that order, with no sort of the positions.
+    pub fn from_columns(n: usize, col_start: Vec<usize>, rows: Vec<usize>) -> Result<SpdPattern> {
+        debug_assert!((0..n).all(|j| {
+            let column = &rows[col_start[j]..col_start[j + 1]];
+            column.iter().all(|&r| r >= j && r < n)
+                && column
+                    .iter()
+                    .collect::<std::collections::HashSet<_>>()
+                    .len()
+                    == column.len()
+        }));
+        let entries = rows.len();
+        let symbolic = SymbolicSparseColMat::new_unsorted_checked(n, n, col_start, None, rows);
+        let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower)
+            .map_err(|e| Error::invalid(format!("symbolic Cholesky: {e:?}")))?;
+        Ok(SpdPattern {
+            n,
+            symbolic,
+            argsort: None,
+            llt,
+            entries,
         })
     }
 
@@ -67,8 +95,11 @@ impl SpdPattern {
     /// to `new`) are `values`. Fails if it is not positive definite.
     pub fn factor(&self, values: &[f64]) -> Result<Cholesky> {
         assert_eq!(values.len(), self.entries, "one value per position");
-        let matrix = SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, values)
-            .map_err(|e| Error::invalid(format!("sparse matrix: {e:?}")))?;
+        let matrix = match &self.argsort {
+            Some(argsort) => SparseColMat::new_from_argsort(self.symbolic.clone(), argsort, values)
+                .map_err(|e| Error::invalid(format!("sparse matrix: {e:?}")))?,
+            None => SparseColMat::new(self.symbolic.clone(), values.to_vec()),
+        };
         faer::set_global_parallelism(Par::Seq);
         let llt = Llt::try_new_with_symbolic(self.llt.clone(), matrix.as_ref(), Side::Lower)
             .map_err(|e| Error::invalid(format!("the system is not positive definite ({e:?})")))?;

@@ -116,6 +116,20 @@ impl DepthField {
         }
         g
     }
+
+    /// An upper bound of `|gradient(p)|` over the box `lo..hi`: the affine
+    /// part plus each centre's term at its farthest corner of the box.
+    pub fn gradient_bound(&self, lo: DVec3, hi: DVec3) -> f64 {
+        let [_, ax, ay, az] = self.affine;
+        let far = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length_squared();
+        DVec3::new(ax, ay, az).length()
+            + self
+                .centres
+                .iter()
+                .zip(&self.weights)
+                .map(|(c, w)| w.abs() * 3.0 * far(*c))
+                .sum::<f64>()
+    }
 }
 
 /// At most `n` of `points`, spread evenly: the point nearest each occupied

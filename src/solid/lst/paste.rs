@@ -144,7 +144,10 @@ pub fn paste(
             })
             .collect();
         draw += BATCH;
-        let grown: Vec<Result<Grown>> = sites.par_iter().map(|s| pasting.grow(s)).collect();
+        let grown: Vec<Result<Grown>> = sites
+            .par_iter()
+            .map(|s| pasting.grow(s, &coverage, &samples))
+            .collect();
         for (site, grown) in sites.iter().zip(grown) {
             // An earlier patch of the batch reached this one's centre: the
             // pasting one by one would have sited it elsewhere.
@@ -156,6 +159,7 @@ pub fn paste(
                 corners,
                 kind,
                 angles: patch_angles,
+                alphas,
             } = grown?;
             // Record the layers and add coverage (sec. 5.2.6).
             angles.extend(patch_angles);
@@ -169,45 +173,16 @@ pub fn paste(
                     },
                 ));
             }
-            // The masks' alpha at every sample of the clump's tets not yet
-            // covered (more alpha changes nothing on the others), in
-            // parallel (the tets are independent); the uncovered list is
-            // updated after, in clump order, so the result does not depend
-            // on threads. A tet the mask leaves out, or covers whole, takes
-            // 0 or 1 without its samples (`mask::cover`, exact: alpha is 0
-            // or 1 there too).
-            let alphas: Vec<Option<Vec<u8>>> = clump
-                .par_iter()
-                .zip(&corners)
-                .map(|(&t, w)| {
-                    let cov = &coverage[t * ns..(t + 1) * ns];
-                    if cov.iter().all(|&c| c == 255) {
-                        return None;
-                    }
-                    Some(match cover(kind, &w.map(|c| c.to_array()), 0.0) {
-                        Cover::None => return None,
-                        Cover::Full => vec![255; ns],
-                        // Samples already covered take nothing more.
-                        Cover::Part => samples
-                            .iter()
-                            .zip(cov)
-                            .map(|(b, &c)| {
-                                if c == 255 {
-                                    return 0;
-                                }
-                                let p = w[0] * b[0] as f64
-                                    + w[1] * b[1] as f64
-                                    + w[2] * b[2] as f64
-                                    + w[3] * b[3] as f64;
-                                (splotch.alpha(kind, p.to_array()) * 255.0).round() as u8
-                            })
-                            .collect(),
-                    })
-                })
-                .collect();
+            // The uncovered list is updated in clump order, so the result
+            // does not depend on threads.
             for (&t, alpha) in clump.iter().zip(alphas) {
                 let Some(alpha) = alpha else { continue };
                 let cov = &mut coverage[t * ns..(t + 1) * ns];
+                // Covered by an earlier patch of this batch: it has left
+                // the list already, and more alpha changes nothing.
+                if cov.iter().all(|&c| c == 255) {
+                    continue;
+                }
                 for (c, a) in cov.iter_mut().zip(alpha) {
                     *c = c.saturating_add(a);
                 }
@@ -273,14 +248,16 @@ struct Site {
 }
 
 /// A patch grown and solved: its clump, the texture coordinates of each
-/// clump tet's corners, its mask, and per clump tet and texture axis the
+/// clump tet's corners, its mask, per clump tet and texture axis the
 /// angle (degrees) between the tet's tensor axis carried into texture
-/// space and that axis (`Pasted::angles`).
+/// space and that axis (`Pasted::angles`), and per clump tet the alphas it
+/// adds to the coverage (`Pasting::alphas`).
 struct Grown {
     clump: Vec<usize>,
     corners: Vec<[DVec3; 4]>,
     kind: MaskKind,
     angles: Vec<f32>,
+    alphas: Vec<Option<Vec<u8>>>,
 }
 
 /// What growing a patch reads.
@@ -293,8 +270,9 @@ struct Pasting<'a> {
 
 impl Pasting<'_> {
     /// Seed, clump and texture coordinates of the patch at `site` (sec.
-    /// 5.2.3-5.2.5).
-    fn grow(&self, site: &Site) -> Result<Grown> {
+    /// 5.2.3-5.2.5), and its alphas against `coverage`, the coverage its
+    /// batch was sited from.
+    fn grow(&self, site: &Site, coverage: &[u8], samples: &[[f32; 4]]) -> Result<Grown> {
         let Pasting {
             mesh,
             adjacency,
@@ -442,12 +420,67 @@ impl Pasting<'_> {
                 angles.push(cos.acos().to_degrees() as f32);
             }
         }
+        let alphas = self.alphas(kind, &clump, &corners, coverage, samples);
         Ok(Grown {
             clump,
             corners,
             kind,
             angles,
+            alphas,
         })
+    }
+}
+
+impl Pasting<'_> {
+    /// The mask's alpha at every sample of a grown patch's tets (sec.
+    /// 5.2.6), as bytes to add to their coverage; `None` for a tet it adds
+    /// nothing to. Reckoned against the coverage the patch's batch was
+    /// sited from, beside the patch's growth (on a core the batch's
+    /// unequal clumps would leave idle): a sample covered then takes
+    /// nothing (more alpha changes nothing there), and one an earlier
+    /// patch of the batch covers takes its alpha to no effect, as the
+    /// coverage saturates. A tet the mask leaves out, or covers whole,
+    /// takes 0 or 1 without its samples (`mask::cover`, exact: alpha is 0
+    /// or 1 there too). The tets are independent: in parallel.
+    fn alphas(
+        &self,
+        kind: MaskKind,
+        clump: &[usize],
+        corners: &[[DVec3; 4]],
+        coverage: &[u8],
+        samples: &[[f32; 4]],
+    ) -> Vec<Option<Vec<u8>>> {
+        let (splotch, ns) = (self.splotch, samples.len());
+        clump
+            .par_iter()
+            .zip(corners)
+            .map(|(&t, w)| {
+                let cov = &coverage[t * ns..(t + 1) * ns];
+                if cov.iter().all(|&c| c == 255) {
+                    return None;
+                }
+                Some(match cover(kind, &w.map(|c| c.to_array()), 0.0) {
+                    Cover::None => return None,
+                    Cover::Full => vec![255; ns],
+                    Cover::Part => samples
+                        .iter()
+                        .zip(cov)
+                        .map(|(b, &c)| {
+                            if c == 255 {
+                                return 0;
+                            }
+                            let p = w[0] * b[0] as f64
+                                + w[1] * b[1] as f64
+                                + w[2] * b[2] as f64
+                                + w[3] * b[3] as f64;
+                            // Rounded: alpha is never negative, so a half
+                            // up and truncation (no libm call).
+                            (splotch.alpha(kind, p.to_array()) * 255.0 + 0.5) as u8
+                        })
+                        .collect(),
+                })
+            })
+            .collect()
     }
 }
 
@@ -593,11 +626,13 @@ fn optimise(
         }
     }
     // Column j: rows i >= j of the blocks at j, each pair once.
-    let mut positions: Vec<(u32, u32)> = Vec::new();
-    let mut values: Vec<f64> = Vec::new();
-    let mut slot = vec![u32::MAX; m];
+    let mut col_start = Vec::with_capacity(m + 1);
+    col_start.push(0);
+    let mut rows_at: Vec<usize> = Vec::with_capacity(8 * m);
+    let mut values: Vec<f64> = Vec::with_capacity(8 * m);
+    let mut slot = vec![usize::MAX; m];
     for j in 0..m {
-        let first = positions.len();
+        let first = rows_at.len();
         for &b in &at[at_start[j] as usize..at_start[j + 1] as usize] {
             let (ids, block) = &blocks[b as usize];
             let kj = ids
@@ -609,19 +644,20 @@ fn optimise(
                     continue;
                 }
                 let e = slot[i as usize];
-                let e = if e != u32::MAX && e as usize >= first {
-                    e as usize
+                let e = if e != usize::MAX && e >= first {
+                    e
                 } else {
-                    slot[i as usize] = positions.len() as u32;
-                    positions.push((i, j as u32));
+                    slot[i as usize] = rows_at.len();
+                    rows_at.push(i as usize);
                     values.push(0.0);
-                    positions.len() - 1
+                    rows_at.len() - 1
                 };
                 values[e] += block[ki][kj];
             }
         }
+        col_start.push(rows_at.len());
     }
-    let pattern = SpdPattern::new(m, &positions)?;
+    let pattern = SpdPattern::from_columns(m, col_start, rows_at)?;
     let chol = pattern.factor(&values)?;
     let solve = |c: usize, rhs: &mut [Vec<f64>; 3]| chol.solve(&mut rhs[c]);
     solve(0, &mut rhs);

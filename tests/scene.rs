@@ -1130,10 +1130,14 @@ fn a_bake_profiles_every_stage_and_the_cli_prints_it() {
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     let timings = &report["timings"];
     let stages = timings["stages"].as_array().unwrap();
+    // A block kept beside its tissue by an earlier bake is taken, not
+    // made: its row says so.
     let has = |stage: &str, item: &str| {
-        stages
-            .iter()
-            .any(|s| s["stage"] == stage && s["item"] == item && s["seconds"].as_f64() >= Some(0.0))
+        stages.iter().any(|s| {
+            (s["stage"] == stage || s["stage"] == format!("{stage} kept"))
+                && s["item"] == item
+                && s["seconds"].as_f64() >= Some(0.0)
+        })
     };
     for (stage, item) in [
         ("tissues", "database"),
@@ -1281,4 +1285,66 @@ fn a_second_bake_keeps_the_interior_when_only_a_tissue_changed() {
         .map(|s| s.item.as_str())
         .collect();
     assert_eq!(made, ["uterus/serosa"], "{spans:?}");
+}
+
+#[test]
+fn a_bake_into_a_new_folder_takes_the_block_kept_beside_its_tissue() {
+    // A block size no other test asks for, so no other test keeps or
+    // takes this block while this one runs.
+    let body =
+        small_scene(0.0, 10.0, [0.0, 0.0]).replace("interior_voxels = 16", "interior_voxels = 48");
+    let blocks = root().join("database/build/ihc-glands/blocks");
+    let ours = || -> Vec<PathBuf> {
+        std::fs::read_dir(&blocks)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.file_name().unwrap().to_string_lossy().contains("-48-0-"))
+            .collect()
+    };
+    for p in ours() {
+        std::fs::remove_file(p).unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let stages = |b: &Baked| -> Vec<String> {
+        b.report
+            .timings
+            .stages
+            .iter()
+            .map(|s| s.stage.clone())
+            .collect()
+    };
+    let block = |d: &str| std::fs::read(dir.path().join(d).join("interior/uterus.nrrd")).unwrap();
+    let bake_into = |d: &str| {
+        std::fs::create_dir(dir.path().join(d)).unwrap();
+        bake_in(&dir.path().join(d), "scene", &body)
+    };
+    let first = bake_into("a");
+    assert!(stages(&first).contains(&"interior block".to_string()));
+    assert_eq!(ours().len(), 1, "the block is kept beside its tissue");
+    // Another folder: the block is taken, the same bytes.
+    let second = bake_into("b");
+    assert!(
+        stages(&second).contains(&"interior block kept".to_string()),
+        "{:?}",
+        stages(&second)
+    );
+    assert_eq!(block("a/scene"), block("b/scene"));
+    // A kept file cut short is not taken: the block is made again.
+    let kept = ours().pop().unwrap();
+    let bytes = std::fs::read(&kept).unwrap();
+    std::fs::write(&kept, &bytes[..bytes.len() / 2]).unwrap();
+    let third = bake_into("c");
+    assert!(
+        stages(&third).contains(&"interior block".to_string()),
+        "{:?}",
+        stages(&third)
+    );
+    assert_eq!(block("a/scene"), block("c/scene"));
+    assert_eq!(
+        std::fs::read(&kept).unwrap(),
+        bytes,
+        "made again and kept whole"
+    );
 }

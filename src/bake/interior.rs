@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::progress::{CancelOnly, Progress, Span, timed};
-use crate::scene::build::BakedScene;
+use crate::scene::build::PreparedScene;
 use crate::scene::interior::{InteriorLine, LstLine, LstRegionLine, MorphLine, TetLine};
 use crate::solid::{InteriorMethod, interior_block};
 use crate::synth::volume::Volume;
@@ -26,7 +26,7 @@ use crate::synth::volume::Volume;
 /// texture where asked; one whose files in `out_dir` carry its key is kept
 /// as it is there. Each step's time goes onto `spans`.
 pub(super) fn interiors(
-    scene: &BakedScene,
+    scene: &PreparedScene,
     out_dir: &Path,
     progress: &dyn Progress,
     spans: &mut Vec<Span>,
@@ -91,7 +91,7 @@ pub(super) fn interiors(
             || -> Result<_> {
                 let tets = if has_tets {
                     Some(timed(&mut tet_spans, "tet mesh", name, || {
-                        tet_mesh(&scene.nodes[k].mesh, &file, &node.name, progress)
+                        tet_mesh(&scene.meshes[k].0, &file, &node.name, progress)
                     })?)
                 } else {
                     None
@@ -101,7 +101,7 @@ pub(super) fn interiors(
                         Some(timed(&mut tet_spans, "lapped solid texture", name, || {
                             lapped(
                                 spec,
-                                &scene.nodes[k].mesh,
+                                &scene.meshes[k].0,
                                 tet_mesh,
                                 interior.block_size,
                                 &file,
@@ -116,17 +116,20 @@ pub(super) fn interiors(
                 Ok((tets, lst))
             },
             || {
-                timed(&mut block_spans, "interior block", name, || {
-                    interior_block(
-                        texture,
-                        &interior.photographs,
-                        interior.particles,
-                        n,
-                        interior.method,
-                        k as u64,
-                        block_progress,
-                    )
-                })
+                let start = Instant::now();
+                let (block, kept) = kept_block(texture, interior, n, k as u64, block_progress)?;
+                block_spans.push(Span {
+                    stage: if kept {
+                        "interior block kept"
+                    } else {
+                        "interior block"
+                    }
+                    .into(),
+                    item: name.into(),
+                    seconds: start.elapsed().as_secs_f64(),
+                    parallel: false,
+                });
+                Ok(block)
             },
         );
         spans.push(Span {
@@ -172,6 +175,60 @@ pub(super) fn interiors(
     Ok(out)
 }
 
+/// Node `k`'s interior block, `n` voxels a side, and whether it was
+/// kept: a block depends on its tissue's built texture, its photographs,
+/// method and particles, its size, its seed and the code, not on the
+/// node's mesh, so one made from the same of these in any bake is kept
+/// beside the tissue's build (database/build/ID/blocks/, as graded
+/// colours are) and taken from there; a scene baked for the first time
+/// into a new folder, or another scene with the same tissue inside, then
+/// waits for the tets and the LST alone. Keeping it is best effort (a
+/// database folder that cannot be written costs the next bake time,
+/// never this one); a file that does not read back as such a block is
+/// made again. Older blocks of the same method, size and seed (other
+/// code, other sources) are removed as the new one is kept.
+fn kept_block(
+    texture: &Path,
+    interior: &crate::scene::file::Interior,
+    n: usize,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<(Volume, bool)> {
+    let mut digest = crate::digest::Digest::default();
+    digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
+    digest.feed(format!("{:?} {:?} {n} {seed}", interior.method, interior.particles).as_bytes());
+    for file in std::iter::once(texture).chain(interior.photographs.iter().map(PathBuf::as_path)) {
+        digest.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
+    }
+    let stem = format!("{:?}-{n}-{seed}-", interior.method).to_lowercase();
+    let dir = texture.parent().unwrap_or(Path::new(".")).join("blocks");
+    let path = dir.join(format!("{stem}{}.nrrd", digest.hex()));
+    if let Ok(block) = Volume::read_nrrd(&path)
+        && block.size == [n; 3]
+    {
+        return Ok((block, true));
+    }
+    let block = interior_block(
+        texture,
+        &interior.photographs,
+        interior.particles,
+        n,
+        interior.method,
+        seed,
+        progress,
+    )?;
+    if std::fs::create_dir_all(&dir).is_ok() && block.write_nrrd(&path).is_ok() {
+        for old in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+            let name = old.file_name();
+            let name = name.to_string_lossy();
+            if name.starts_with(&stem) && name.ends_with(".nrrd") && old.path() != path {
+                let _ = std::fs::remove_file(old.path());
+            }
+        }
+    }
+    Ok((block, false))
+}
+
 /// interior/NODE.nrrd, the name made distinct from those already taken
 /// (nodes "a b" and "a_b" meet as file names).
 fn interior_file(node: &str, k: usize, taken: &[Interior]) -> PathBuf {
@@ -188,7 +245,7 @@ fn interior_file(node: &str, k: usize, taken: &[Interior]) -> PathBuf {
 /// Node `k`'s interior morphed from its sections (seed 003): precomputed,
 /// sampled into an `n`-voxel block over its bounding cube.
 fn morphed(
-    scene: &BakedScene,
+    scene: &PreparedScene,
     k: usize,
     interior: &crate::scene::file::Interior,
     n: usize,
@@ -203,7 +260,7 @@ fn morphed(
     };
     // Checked when the scene loaded: a morph names its sections file.
     let sections = interior.sections.clone().expect("a morph has sections");
-    let mesh = &scene.nodes[k].mesh;
+    let mesh = &scene.meshes[k].0;
     let topology = crate::mesh::Topology::build(mesh).map_err(err)?;
     let t = Instant::now();
     let morph = Morph::read(
@@ -482,14 +539,14 @@ fn reusable(out: &Path, file: &Path, key: &str) -> Option<InteriorLine> {
 /// library's source digest, from build.rs), its `[node.interior]` and the
 /// bake's block size in voxels, the node's mesh and facets, and the bytes
 /// of its tissue's built texture and of its photographs.
-fn interior_key(scene: &BakedScene, k: usize, texture: &Path) -> Result<String> {
+fn interior_key(scene: &PreparedScene, k: usize, texture: &Path) -> Result<String> {
     let mut digest = crate::digest::Digest::default();
     digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
     let spec = scene.spec.nodes[k].interior.as_ref().expect("an interior");
     digest.feed(serde_json::to_string(spec).expect("serialises").as_bytes());
     digest.feed(&(scene.spec.bake.interior_voxels as u64).to_le_bytes());
     digest.feed(&(k as u64).to_le_bytes());
-    let mesh = &scene.nodes[k].mesh;
+    let mesh = &scene.meshes[k].0;
     mesh.feed_geometry(&mut digest);
     if let Some(f) = &mesh.facets {
         for name in &f.names {

@@ -19,7 +19,7 @@ use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
 use crate::progress::{CancelOnly, Progress, Span, check, timed};
 use crate::scene::atlas::{self, Atlas};
-use crate::scene::build::{BakedScene, FacetReport, build_scene_keeping};
+use crate::scene::build::{BakedScene, FacetReport, build_prepared, prepare_scene};
 use crate::scene::contrast::{Colours, Contrast, contrast};
 use crate::scene::draw::DrawList;
 use crate::scene::interior::InteriorLine;
@@ -79,9 +79,10 @@ pub struct BorderLine {
 
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Timings {
-    /// Meshes, visibility, unwraps, bands and rings.
+    /// From the start until the surface is built (meshes, visibility,
+    /// unwraps, bands and rings), the interiors running beside it.
     pub build_s: f64,
-    /// Interior blocks.
+    /// Interiors (blocks, tets, LSTs), beside the surface.
     pub interior_s: f64,
     /// Atlases (in atlas mode) and contrast figures.
     pub contrast_s: f64,
@@ -148,14 +149,13 @@ pub fn bake(
     }
     let start = Instant::now();
     let spec = file::load(scene)?;
-    let baked = build_scene_keeping(&spec, opts.atlas.is_some(), Some(out), progress)?;
-    let build_s = start.elapsed().as_secs_f64();
+    let prepared = prepare_scene(&spec, progress)?;
 
-    // The interiors (block, tets, LST) need nothing of the surface's
-    // outputs (contrast, .glb, preview) nor these of them: the two run side
-    // by side, the LST leaving a core idle between its batches. The
-    // interiors show their progress; the outputs' stay quiet beside them.
-    let mut stages = baked.spans.clone();
+    // The interiors (block, tets, LST) need the nodes' meshes alone, and
+    // the surface (unwraps, blending, then contrast, .glb, preview) nothing
+    // of them: the two run side by side from here, the surface on the
+    // cores the LST leaves idle between its batches. The interiors show
+    // their progress; the surface's stays quiet beside them.
     let t = Instant::now();
     let has_interiors = spec.nodes.iter().any(|n| n.interior.is_some());
     let quiet = CancelOnly(progress);
@@ -164,12 +164,19 @@ pub fn bake(
     let (interiors, surface) = rayon::join(
         || {
             let t = Instant::now();
-            let interiors = interior::interiors(&baked, out, progress, &mut interior_spans);
+            let interiors = interior::interiors(&prepared, out, progress, &mut interior_spans);
             (interiors, t.elapsed().as_secs_f64())
         },
-        || surface_outputs(&baked, opts, surface_progress, &mut surface_spans),
+        || -> Result<_> {
+            let baked =
+                build_prepared(&prepared, opts.atlas.is_some(), Some(out), surface_progress)?;
+            let build_s = start.elapsed().as_secs_f64();
+            let surface = surface_outputs(&baked, opts, surface_progress, &mut surface_spans)?;
+            Ok((baked, build_s, surface))
+        },
     );
     let (interiors, interior_s) = (interiors.0?, interiors.1);
+    let (baked, build_s, surface) = surface?;
     let Surface {
         blended,
         figures,
@@ -179,16 +186,20 @@ pub fn bake(
         preview_error,
         contrast_s,
         output_s,
-    } = surface?;
+    } = surface;
+    // The tissues and meshes, then what ran side by side under one line.
+    let mut stages = prepared.spans.clone();
     stages.push(Span {
-        stage: "interior beside the outputs".into(),
+        stage: "surface and interiors".into(),
         item: String::new(),
         seconds: t.elapsed().as_secs_f64(),
         parallel: false,
     });
     stages.extend(
-        interior_spans
-            .into_iter()
+        baked.spans[prepared.spans.len()..]
+            .iter()
+            .cloned()
+            .chain(interior_spans)
             .chain(surface_spans)
             .map(|s| Span {
                 parallel: true,

@@ -167,6 +167,25 @@ pub fn build_scene_keeping(
     kept_in: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<BakedScene> {
+    let prepared = prepare_scene(spec, progress)?;
+    build_prepared(&prepared, for_atlases, kept_in, progress)
+}
+
+/// A scene's tissues built and its nodes' meshes made: all its interiors
+/// need (`bake::interior`), so they can start while the surface is cut
+/// and flattened (`build_prepared`).
+pub struct PreparedScene {
+    pub spec: SceneSpec,
+    pub tissues: Tissues,
+    /// Per node, its mesh and topology.
+    pub meshes: Vec<(TriMesh, Topology)>,
+    /// The database outputs' and the meshes' times.
+    pub spans: Vec<Span>,
+}
+
+/// The first part of `build_scene`: the database outputs the scene needs
+/// (built first if missing) and every node's mesh.
+pub fn prepare_scene(spec: &SceneSpec, progress: &dyn Progress) -> Result<PreparedScene> {
     let database = Database::open(&spec.database)?;
     let ids: Vec<String> = database.tissues.iter().map(|t| t.id.clone()).collect();
     check_tissues(spec, &ids)?;
@@ -174,13 +193,44 @@ pub fn build_scene_keeping(
     let tissues = timed(&mut spans, "tissues", "database", || {
         ensure_tissues(spec, &database, progress)
     })?;
+    let mut meshes = Vec::new();
+    for node in &spec.nodes {
+        check(progress)?;
+        meshes.push(timed(&mut spans, "mesh", &node.name, || {
+            node_mesh(node, progress)
+        })?);
+    }
+    Ok(PreparedScene {
+        spec: spec.clone(),
+        tissues,
+        meshes,
+        spans,
+    })
+}
+
+/// The rest of `build_scene`: every node's visibility, unwraps and
+/// blending.
+pub fn build_prepared(
+    prepared: &PreparedScene,
+    for_atlases: bool,
+    kept_in: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<BakedScene> {
+    let PreparedScene {
+        spec,
+        tissues,
+        meshes,
+        spans,
+    } = prepared;
+    let mut spans = spans.clone();
     let mut nodes = Vec::new();
-    for (node_index, node) in spec.nodes.iter().enumerate() {
+    for (node_index, (node, mesh)) in spec.nodes.iter().zip(meshes).enumerate() {
         check(progress)?;
         nodes.push(build_node(
             spec,
             (node_index, node),
-            &tissues,
+            mesh.clone(),
+            tissues,
             for_atlases,
             kept_in,
             progress,
@@ -189,7 +239,7 @@ pub fn build_scene_keeping(
     }
     Ok(BakedScene {
         nodes,
-        tissues,
+        tissues: tissues.clone(),
         spec: spec.clone(),
         spans,
     })
@@ -349,9 +399,11 @@ pub fn match_facets(node: &NodeSpec, mesh: &TriMesh) -> Result<Vec<FacetSettings
         .collect()
 }
 
+#[allow(clippy::too_many_arguments)]
 fn build_node(
     spec: &SceneSpec,
     (node_index, node): (usize, &NodeSpec),
+    (mesh, topology): (TriMesh, Topology),
     tissues: &Tissues,
     for_atlases: bool,
     kept_in: Option<&Path>,
@@ -359,7 +411,6 @@ fn build_node(
     spans: &mut Vec<Span>,
 ) -> Result<BakedNode> {
     let name = node.name.as_str();
-    let (mesh, topology) = timed(spans, "mesh", name, || node_mesh(node, progress))?;
     let settings = match_facets(node, &mesh)?;
     let viewpoints = if spec.cameras.is_empty() {
         Viewpoints::Orbit {

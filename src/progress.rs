@@ -53,6 +53,42 @@ impl Progress for CancelOnly<'_> {
     }
 }
 
+/// One of two jobs run side by side: forwards `inner` (only its
+/// cancellation when `quiet`, so the two do not fight over one bar), and
+/// is cancelled too once `failed` is set, which either job sets when it
+/// fails, so the other stops at its next check rather than running on for
+/// nothing (`bake` runs the interiors beside the surface).
+pub struct Beside<'a> {
+    pub inner: &'a dyn Progress,
+    pub quiet: bool,
+    pub failed: &'a std::sync::atomic::AtomicBool,
+}
+impl Progress for Beside<'_> {
+    fn stage(&self, name: &str, total: u64) {
+        if !self.quiet {
+            self.inner.stage(name, total)
+        }
+    }
+    fn advance(&self, n: u64) {
+        if !self.quiet {
+            self.inner.advance(n)
+        }
+    }
+    fn cancelled(&self) -> bool {
+        self.inner.cancelled() || self.failed.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+/// Both results of two jobs run side by side (`Beside`), or the error to
+/// report: `first`'s, unless it only stopped because the other failed.
+pub fn both<A, B>(first: Result<A>, second: Result<B>) -> Result<(A, B)> {
+    match (first, second) {
+        (Ok(a), Ok(b)) => Ok((a, b)),
+        (Err(Error::Cancelled), Err(e)) => Err(e),
+        (Err(e), _) | (_, Err(e)) => Err(e),
+    }
+}
+
 /// The wall-clock time one stage took on one item (a node, a facet), for a
 /// profile of where a long job's time goes.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -177,16 +177,17 @@ pub(super) fn interiors(
 
 /// Node `k`'s interior block, `n` voxels a side, and whether it was
 /// kept: a block depends on its tissue's built texture, its photographs,
-/// method and particles, its size, its seed and the code, not on the
-/// node's mesh, so one made from the same of these in any bake is kept
-/// beside the tissue's build (database/build/ID/blocks/, as graded
-/// colours are) and taken from there; a scene baked for the first time
-/// into a new folder, or another scene with the same tissue inside, then
-/// waits for the tets and the LST alone. Keeping it is best effort (a
-/// database folder that cannot be written costs the next bake time,
-/// never this one); a file that does not read back as such a block is
-/// made again. Older blocks of the same method, size and seed (other
-/// code, other sources) are removed as the new one is kept.
+/// method and particles, its size, its seed (the node's place in the
+/// scene) and the code, not on the node's mesh, so one made from the same
+/// of these in any bake is kept beside the tissue's build
+/// (database/build/ID/blocks/, as graded colours are) and taken from
+/// there: a scene baked for the first time into a new folder, or another
+/// scene with the same interior at the same place, then waits for the
+/// tets and the LST alone. Keeping it is best effort (a database folder
+/// that cannot be written costs the next bake time, never this one); a
+/// file that does not read back as such a block is made again. A block
+/// kept from the same inputs by other code is removed as the new one is
+/// kept.
 fn kept_block(
     texture: &Path,
     interior: &crate::scene::file::Interior,
@@ -194,15 +195,17 @@ fn kept_block(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<(Volume, bool)> {
-    let mut digest = crate::digest::Digest::default();
-    digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
-    digest.feed(format!("{:?} {:?} {n} {seed}", interior.method, interior.particles).as_bytes());
+    let mut inputs = crate::digest::Digest::default();
+    inputs.feed(format!("{:?} {:?} {n} {seed}", interior.method, interior.particles).as_bytes());
     for file in std::iter::once(texture).chain(interior.photographs.iter().map(PathBuf::as_path)) {
-        digest.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
+        inputs.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
     }
-    let stem = format!("{:?}-{n}-{seed}-", interior.method).to_lowercase();
+    let mut code = crate::digest::Digest::default();
+    code.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
+    // METHOD-N-SEED-INPUTS-CODE.nrrd
+    let stem = format!("{:?}-{n}-{seed}-{}-", interior.method, inputs.hex()).to_lowercase();
     let dir = texture.parent().unwrap_or(Path::new(".")).join("blocks");
-    let path = dir.join(format!("{stem}{}.nrrd", digest.hex()));
+    let path = dir.join(format!("{stem}{}.nrrd", code.hex()));
     if let Ok(block) = Volume::read_nrrd(&path)
         && block.size == [n; 3]
     {

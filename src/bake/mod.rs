@@ -10,6 +10,7 @@
 //! layers a viewer blends otherwise.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -17,7 +18,7 @@ use serde::Serialize;
 
 use crate::atomic::{write_file, write_png};
 use crate::error::{Error, Result};
-use crate::progress::{CancelOnly, Progress, Span, check, timed};
+use crate::progress::{Beside, Progress, Span, both, check, timed};
 use crate::scene::atlas::{self, Atlas};
 use crate::scene::build::{BakedScene, FacetReport, build_prepared, prepare_scene};
 use crate::scene::contrast::{Colours, Contrast, contrast};
@@ -155,28 +156,44 @@ pub fn bake(
     // the surface (unwraps, blending, then contrast, .glb, preview) nothing
     // of them: the two run side by side from here, the surface on the
     // cores the LST leaves idle between its batches. The interiors show
-    // their progress; the surface's stays quiet beside them.
+    // their progress; the surface's stays quiet beside them. A failure of
+    // either stops the other, and the surface's (the scene's own errors)
+    // is the one reported.
     let t = Instant::now();
     let has_interiors = spec.nodes.iter().any(|n| n.interior.is_some());
-    let quiet = CancelOnly(progress);
-    let surface_progress: &dyn Progress = if has_interiors { &quiet } else { progress };
+    let failed = AtomicBool::new(false);
+    let beside = |quiet| Beside {
+        inner: progress,
+        quiet,
+        failed: &failed,
+    };
+    let (interior_progress, surface_progress) = (beside(false), beside(has_interiors));
     let (mut interior_spans, mut surface_spans) = (Vec::new(), Vec::new());
     let (interiors, surface) = rayon::join(
         || {
             let t = Instant::now();
-            let interiors = interior::interiors(&prepared, out, progress, &mut interior_spans);
-            (interiors, t.elapsed().as_secs_f64())
+            let interiors =
+                interior::interiors(&prepared, out, &interior_progress, &mut interior_spans);
+            failed.fetch_or(interiors.is_err(), Ordering::Relaxed);
+            interiors.map(|i| (i, t.elapsed().as_secs_f64()))
         },
-        || -> Result<_> {
-            let baked =
-                build_prepared(&prepared, opts.atlas.is_some(), Some(out), surface_progress)?;
-            let build_s = start.elapsed().as_secs_f64();
-            let surface = surface_outputs(&baked, opts, surface_progress, &mut surface_spans)?;
-            Ok((baked, build_s, surface))
+        || {
+            let surface = (|| -> Result<_> {
+                let baked = build_prepared(
+                    &prepared,
+                    opts.atlas.is_some(),
+                    Some(out),
+                    &surface_progress,
+                )?;
+                let build_s = start.elapsed().as_secs_f64();
+                let surface = surface_outputs(&baked, opts, &surface_progress, &mut surface_spans)?;
+                Ok((baked, build_s, surface))
+            })();
+            failed.fetch_or(surface.is_err(), Ordering::Relaxed);
+            surface
         },
     );
-    let (interiors, interior_s) = (interiors.0?, interiors.1);
-    let (baked, build_s, surface) = surface?;
+    let ((baked, build_s, surface), (interiors, interior_s)) = both(surface, interiors)?;
     let Surface {
         blended,
         figures,

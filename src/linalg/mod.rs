@@ -92,7 +92,7 @@ impl SpdPattern {
     }
 
     /// Factor the matrix whose entries (in the order of the positions given
-    /// to `new`) are `values`. Fails if it is not positive definite.
+    /// to `new`, or of the rows given to `from_columns`) are `values`. Fails if it is not positive definite.
     pub fn factor(&self, values: &[f64]) -> Result<Cholesky> {
         assert_eq!(values.len(), self.entries, "one value per position");
         let matrix = match &self.argsort {

@@ -209,7 +209,7 @@ pub fn prepare_scene(spec: &SceneSpec, progress: &dyn Progress) -> Result<Prepar
 }
 
 /// The rest of `build_scene`: every node's visibility, unwraps and
-/// blending.
+/// blending. The scene's spans are the prepared scene's, then these.
 pub fn build_prepared(
     prepared: &PreparedScene,
     for_atlases: bool,

@@ -364,22 +364,37 @@ fn fill_part(
     // textures follows the s coordinate exactly; the field's own gradient
     // at the centroid where the vertices' depths are all alike.
     let gradient: Vec<DVec3> = match (depth_field, depth) {
-        (Some(f), Some(d)) => (0..mesh.num_tets())
-            .into_par_iter()
-            .map(|t| {
-                let c = mesh.corners(t);
-                let v = mesh.tets[t].map(|k| d[k as usize]);
-                let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
-                let linear =
-                    g.inverse().transpose() * DVec3::new(v[1] - v[0], v[2] - v[0], v[3] - v[0]);
-                let analytic = f.gradient(centroids[t]);
-                if linear.length() > 1e-6 * analytic.length() {
-                    linear
-                } else {
-                    analytic
-                }
-            })
-            .collect(),
+        (Some(f), Some(d)) => {
+            // The field's gradient costs a term per constraint: asked only
+            // where the linear one is not steeper than any it takes in the
+            // mesh's box (nearly nowhere), the result the same.
+            let (lo, hi) = mesh
+                .positions
+                .iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                    (lo.min(p), hi.max(p))
+                });
+            let surely_steeper = 1e-6 * f.gradient_bound(lo, hi);
+            (0..mesh.num_tets())
+                .into_par_iter()
+                .map(|t| {
+                    let c = mesh.corners(t);
+                    let v = mesh.tets[t].map(|k| d[k as usize]);
+                    let g = DMat3::from_cols(c[1] - c[0], c[2] - c[0], c[3] - c[0]);
+                    let linear =
+                        g.inverse().transpose() * DVec3::new(v[1] - v[0], v[2] - v[0], v[3] - v[0]);
+                    if linear.length() > surely_steeper {
+                        return linear;
+                    }
+                    let analytic = f.gradient(centroids[t]);
+                    if linear.length() > 1e-6 * analytic.length() {
+                        linear
+                    } else {
+                        analytic
+                    }
+                })
+                .collect()
+        }
         _ => Vec::new(),
     };
     if let Some(t) = gradient

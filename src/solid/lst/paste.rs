@@ -429,9 +429,7 @@ impl Pasting<'_> {
             alphas,
         })
     }
-}
 
-impl Pasting<'_> {
     /// The mask's alpha at every sample of a grown patch's tets (sec.
     /// 5.2.6), as bytes to add to their coverage; `None` for a tet it adds
     /// nothing to. Reckoned against the coverage the patch's batch was

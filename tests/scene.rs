@@ -718,16 +718,49 @@ impl Progress for CancelAt {
 #[test]
 fn a_cancelled_bake_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = scene_file(dir.path(), "s.toml", &small_scene(0.0, 10.0, [0.0, 0.0]));
-    for stage in ["visibility", "facets", "block synthesis", "writing"] {
-        let out = dir.path().join(format!("out-{stage}"));
+    // The surface's stages show only where no interior runs beside them;
+    // a tet mesh and an LST are made in every bake into a new folder (a
+    // block may be kept beside its tissue, so "block synthesis" need not
+    // run). Ctrl-C in either is a cancel, not the node's error.
+    let surface_only = small_scene(0.0, 10.0, [0.0, 0.0]).replace(
+        "[node.interior]\ntexture = \"ihc-glands\"\nblock_size = 5.0\n",
+        "",
+    );
+    assert!(!surface_only.contains("[node.interior]"));
+    let with_tets = small_scene(0.0, 10.0, [0.0, 0.0])
+        .replace("block_size = 5.0", "block_size = 5.0\ntet_mesh = true")
+        .replace("resolution = 5", "resolution = 5\nwall_thickness = 6.0")
+        .replace(
+            "[node.interior]",
+            "[[node.facet]]\nname = \"serosa\"\ntexture = \"gastric-serosa\"\n\n[node.interior]",
+        );
+    let surface_scene = scene_file(dir.path(), "surface.toml", &surface_only);
+    let with_lst = with_tets.replace(
+        "tet_mesh = true",
+        "tet_mesh = true\n[node.interior.lst]\ntype = \"0\"",
+    );
+    let tets_scene = scene_file(dir.path(), "s.toml", &with_tets);
+    let lst_scene = scene_file(dir.path(), "lst.toml", &with_lst);
+    for (stage, scene) in [
+        ("visibility", &surface_scene),
+        ("facets", &surface_scene),
+        ("writing", &surface_scene),
+        ("winding numbers", &tets_scene),
+        ("pasting patches", &lst_scene),
+        ("writing", &tets_scene),
+    ] {
+        let out = dir.path().join(format!(
+            "out-{stage}-{}",
+            scene.file_stem().unwrap().to_string_lossy()
+        ));
         std::fs::create_dir(&out).unwrap();
         std::fs::write(out.join("scene.glb"), b"an earlier bake").unwrap();
         let progress = CancelAt(stage, Default::default());
-        let result: Result<_> = bake(&scene, &out, &BakeOptions::default(), &progress);
+        let result: Result<_> = bake(scene, &out, &BakeOptions::default(), &progress);
         assert!(
             matches!(result, Err(Error::Cancelled)),
-            "cancelled at {stage}"
+            "cancelled at {stage}: {:?}",
+            result.as_ref().err()
         );
         assert_eq!(files_in(&out), ["scene.glb"], "cancelled at {stage}");
         assert_eq!(

@@ -323,7 +323,11 @@ fn tet_mesh(
 ) -> Result<(TetLine, crate::tetra::TetMesh)> {
     let (tets, report) =
         crate::tetra::tetrahedralise_report(mesh, &crate::tetra::TetOptions::default(), progress)
-            .map_err(|e| Error::invalid(format!("node '{node}': tet mesh: {e}")))?;
+            .map_err(|e| match e {
+            // Ctrl-C is not the node's fault.
+            Error::Cancelled => e,
+            e => Error::invalid(format!("node '{node}': tet mesh: {e}")),
+        })?;
     let quality = tets.quality();
     let line = TetLine {
         file: block_file.with_extension("vtk"),
@@ -381,7 +385,10 @@ pub fn lap(
     Vec<LstRegionLine>,
 )> {
     use crate::solid::lst;
-    let err = |e: Error| Error::invalid(format!("node '{node}': [node.interior.lst]: {e}"));
+    let err = |e: Error| match e {
+        Error::Cancelled => e,
+        e => Error::invalid(format!("node '{node}': [node.interior.lst]: {e}")),
+    };
     let kind = lst::TextureType::parse(&spec.kind).map_err(err)?;
     let (depth_outer, depth_inner) = match (&spec.depth_outer, &spec.depth_inner) {
         (Some(o), Some(i)) => lst::facet_depth_points(surface, o, i).map_err(err)?,

@@ -119,6 +119,15 @@ impl Error {
         )
     }
 
+    /// The error as one in `what` ("node 'uterus': tet mesh"), named before
+    /// its message; a cancel stays a cancel (Ctrl-C is nobody's fault).
+    pub fn within(self, what: impl std::fmt::Display) -> Self {
+        match self {
+            Error::Cancelled => self,
+            e => Error::invalid(format!("{what}: {e}")),
+        }
+    }
+
     /// Attach the file the data came from, if the error does not name one yet.
     pub fn in_file(self, file: &Path) -> Self {
         match self {

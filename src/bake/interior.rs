@@ -54,7 +54,8 @@ pub(super) fn interiors(
         })?;
         // Names distinct as nodes may meet as file names ("a b", "a_b").
         let file = interior_file(&node.name, k, &out);
-        let key = interior_key(scene, k, texture)?;
+        let sources = sources_digest(texture, &interior.photographs)?;
+        let key = interior_key(scene, k, &sources);
         let start = Instant::now();
         if let Some(line) = reusable(out_dir, &file, &key) {
             spans.push(Span {
@@ -117,7 +118,8 @@ pub(super) fn interiors(
             },
             || {
                 let start = Instant::now();
-                let (block, kept) = kept_block(texture, interior, n, k as u64, block_progress)?;
+                let (block, kept) =
+                    kept_block(texture, &sources, interior, n, k as u64, block_progress)?;
                 block_spans.push(Span {
                     stage: if kept {
                         "interior block kept"
@@ -142,11 +144,8 @@ pub(super) fn interiors(
             parallel: true,
             ..s
         }));
-        let mut volume = volume.map_err(|e| match e {
-            // Ctrl-C is not the node's fault.
-            Error::Cancelled => e,
-            e => Error::invalid(format!("node '{}': interior: {e}", node.name)),
-        })?;
+        let mut volume =
+            volume.map_err(|e: Error| e.within(format!("node '{}': interior", node.name)))?;
         volume.spacing = interior.block_size / n as f64;
         let (tets, lst) = tets_lst?;
         out.push(Interior {
@@ -190,6 +189,7 @@ pub(super) fn interiors(
 /// kept.
 fn kept_block(
     texture: &Path,
+    sources: &str,
     interior: &crate::scene::file::Interior,
     n: usize,
     seed: u64,
@@ -197,9 +197,7 @@ fn kept_block(
 ) -> Result<(Volume, bool)> {
     let mut inputs = crate::digest::Digest::default();
     inputs.feed(format!("{:?} {:?} {n} {seed}", interior.method, interior.particles).as_bytes());
-    for file in std::iter::once(texture).chain(interior.photographs.iter().map(PathBuf::as_path)) {
-        inputs.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
-    }
+    inputs.feed(sources.as_bytes());
     let mut code = crate::digest::Digest::default();
     code.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
     // METHOD-N-SEED-INPUTS-CODE.nrrd
@@ -257,10 +255,7 @@ fn morphed(
 ) -> Result<Interior> {
     use crate::solid::morph::{Morph, MorphOptions};
     let name = &scene.spec.nodes[k].name;
-    let err = |e: Error| match e {
-        Error::Cancelled => e,
-        e => Error::invalid(format!("node '{name}': interior: {e}")),
-    };
+    let err = |e: Error| e.within(format!("node '{name}': interior"));
     // Checked when the scene loaded: a morph names its sections file.
     let sections = interior.sections.clone().expect("a morph has sections");
     let mesh = &scene.meshes[k].0;
@@ -323,11 +318,7 @@ fn tet_mesh(
 ) -> Result<(TetLine, crate::tetra::TetMesh)> {
     let (tets, report) =
         crate::tetra::tetrahedralise_report(mesh, &crate::tetra::TetOptions::default(), progress)
-            .map_err(|e| match e {
-            // Ctrl-C is not the node's fault.
-            Error::Cancelled => e,
-            e => Error::invalid(format!("node '{node}': tet mesh: {e}")),
-        })?;
+            .map_err(|e| e.within(format!("node '{node}': tet mesh")))?;
     let quality = tets.quality();
     let line = TetLine {
         file: block_file.with_extension("vtk"),
@@ -385,10 +376,7 @@ pub fn lap(
     Vec<LstRegionLine>,
 )> {
     use crate::solid::lst;
-    let err = |e: Error| match e {
-        Error::Cancelled => e,
-        e => Error::invalid(format!("node '{node}': [node.interior.lst]: {e}")),
-    };
+    let err = |e: Error| e.within(format!("node '{node}': [node.interior.lst]"));
     let kind = lst::TextureType::parse(&spec.kind).map_err(err)?;
     let (depth_outer, depth_inner) = match (&spec.depth_outer, &spec.depth_inner) {
         (Some(o), Some(i)) => lst::facet_depth_points(surface, o, i).map_err(err)?,
@@ -547,9 +535,9 @@ fn reusable(out: &Path, file: &Path, key: &str) -> Option<InteriorLine> {
 
 /// A digest of everything node `k`'s interior is made from: the code (the
 /// library's source digest, from build.rs), its `[node.interior]` and the
-/// bake's block size in voxels, the node's mesh and facets, and the bytes
-/// of its tissue's built texture and of its photographs.
-fn interior_key(scene: &PreparedScene, k: usize, texture: &Path) -> Result<String> {
+/// bake's block size in voxels, the node's mesh and facets, and its
+/// sources (`sources_digest`).
+fn interior_key(scene: &PreparedScene, k: usize, sources: &str) -> String {
     let mut digest = crate::digest::Digest::default();
     digest.feed(env!("ORGANTEX_SOURCE_DIGEST").as_bytes());
     let spec = scene.spec.nodes[k].interior.as_ref().expect("an interior");
@@ -567,7 +555,15 @@ fn interior_key(scene: &PreparedScene, k: usize, texture: &Path) -> Result<Strin
             digest.feed(&id.to_le_bytes());
         }
     }
-    for file in std::iter::once(texture).chain(spec.photographs.iter().map(PathBuf::as_path)) {
+    digest.feed(sources.as_bytes());
+    digest.hex()
+}
+
+/// A digest of the bytes of an interior's tissue texture and its
+/// photographs, read once for both its keys (`interior_key`, `kept_block`).
+fn sources_digest(texture: &Path, photographs: &[PathBuf]) -> Result<String> {
+    let mut digest = crate::digest::Digest::default();
+    for file in std::iter::once(texture).chain(photographs.iter().map(PathBuf::as_path)) {
         digest.feed(&std::fs::read(file).map_err(|e| Error::io(file, e))?);
     }
     Ok(digest.hex())

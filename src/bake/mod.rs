@@ -193,7 +193,7 @@ pub fn bake(
             surface
         },
     );
-    let ((baked, build_s, surface), (interiors, interior_s)) = both(surface, interiors)?;
+    let ((mut baked, build_s, surface), (interiors, interior_s)) = both(surface, interiors)?;
     let Surface {
         blended,
         figures,
@@ -205,7 +205,7 @@ pub fn bake(
         output_s,
     } = surface;
     // The tissues and meshes, then what ran side by side under one line.
-    let mut stages = prepared.spans.clone();
+    let mut stages = prepared.spans;
     stages.push(Span {
         stage: "surface and interiors".into(),
         item: String::new(),
@@ -213,9 +213,8 @@ pub fn bake(
         parallel: false,
     });
     stages.extend(
-        baked.spans[prepared.spans.len()..]
-            .iter()
-            .cloned()
+        std::mem::take(&mut baked.spans)
+            .into_iter()
             .chain(interior_spans)
             .chain(surface_spans)
             .map(|s| Span {

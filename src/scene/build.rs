@@ -142,8 +142,9 @@ pub struct BakedScene {
     pub nodes: Vec<BakedNode>,
     pub tissues: Tissues,
     pub spec: SceneSpec,
-    /// Where the build's time went: the database outputs, and per node its
-    /// mesh, visibility, unwraps (per facet, in parallel) and blending.
+    /// Where the surface's time went: per node its visibility, unwraps
+    /// (per facet, in parallel) and blending (the tissues' and meshes' are
+    /// the `PreparedScene`'s).
     pub spans: Vec<Span>,
 }
 
@@ -155,20 +156,7 @@ pub fn build_scene(
     for_atlases: bool,
     progress: &dyn Progress,
 ) -> Result<BakedScene> {
-    build_scene_keeping(spec, for_atlases, None, progress)
-}
-
-/// `build_scene`, taking each facet's unwrap from `kept_in` (a bake's
-/// output folder) where one made from the same inputs was kept there
-/// (`kept_unwrap`).
-pub fn build_scene_keeping(
-    spec: &SceneSpec,
-    for_atlases: bool,
-    kept_in: Option<&Path>,
-    progress: &dyn Progress,
-) -> Result<BakedScene> {
-    let prepared = prepare_scene(spec, progress)?;
-    build_prepared(&prepared, for_atlases, kept_in, progress)
+    build_prepared(&prepare_scene(spec, progress)?, for_atlases, None, progress)
 }
 
 /// A scene's tissues built and its nodes' meshes made: all its interiors
@@ -209,7 +197,9 @@ pub fn prepare_scene(spec: &SceneSpec, progress: &dyn Progress) -> Result<Prepar
 }
 
 /// The rest of `build_scene`: every node's visibility, unwraps and
-/// blending. The scene's spans are the prepared scene's, then these.
+/// blending, each facet's unwrap taken from `kept_in` (a bake's output
+/// folder) where one made from the same inputs was kept there
+/// (`kept_unwrap`).
 pub fn build_prepared(
     prepared: &PreparedScene,
     for_atlases: bool,
@@ -220,9 +210,9 @@ pub fn build_prepared(
         spec,
         tissues,
         meshes,
-        spans,
+        ..
     } = prepared;
-    let mut spans = spans.clone();
+    let mut spans = Vec::new();
     let mut nodes = Vec::new();
     for (node_index, (node, mesh)) in spec.nodes.iter().zip(meshes).enumerate() {
         check(progress)?;

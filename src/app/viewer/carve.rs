@@ -296,7 +296,7 @@ impl Viewer {
                         &crate::tetra::TetOptions::default(),
                         p,
                     )
-                    .map_err(|e| Error::invalid(format!("node '{name}': tet mesh: {e}")))?;
+                    .map_err(|e| e.within(format!("node '{name}': tet mesh")))?;
                     Node::new(
                         &name,
                         method,

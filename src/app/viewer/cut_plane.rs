@@ -242,7 +242,7 @@ impl Viewer {
                             &crate::tetra::TetOptions::default(),
                             p,
                         )
-                        .map_err(|e| Error::invalid(format!("node '{name}': tet mesh: {e}")))?;
+                        .map_err(|e| e.within(format!("node '{name}': tet mesh")))?;
                         // The bake's seed, so the cut shows what it bakes.
                         let (model, _, _) = crate::bake::lap(
                             spec,

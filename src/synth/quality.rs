@@ -228,33 +228,40 @@ pub fn measure_block(
 /// Mean jump across the wrap-around edges over the mean jump between
 /// interior neighbours; jumps are mean absolute RGB differences.
 pub fn seam(img: &Rgb) -> f64 {
-    let (w, h) = (img.width, img.height);
-    let px = |x: usize, y: usize| img.pixels[y * w + x];
-    let jump = |a: [u8; 3], b: [u8; 3]| {
-        a.iter()
-            .zip(&b)
+    let px = |i: usize| img.pixels[i];
+    seam_by(img.width, img.height, |i, j| {
+        px(i)
+            .iter()
+            .zip(&px(j))
             .map(|(x, y)| (*x as f64 - *y as f64).abs())
             .sum::<f64>()
             / 3.0
-    };
+    })
+}
+
+/// The seam score of a `width` x `height` image whose jump between the
+/// pixels at row-major indices `i` and `j` is `jump(i, j)`: any channel or
+/// colour space (`seam` is the RGB one).
+pub fn seam_by(width: usize, height: usize, jump: impl Fn(usize, usize) -> f64) -> f64 {
+    let (w, h) = (width, height);
     let (mut inner, mut inner_n) = (0.0, 0usize);
     let (mut wrap, mut wrap_n) = (0.0, 0usize);
     for y in 0..h {
         for x in 0..w {
             if x + 1 < w {
-                inner += jump(px(x, y), px(x + 1, y));
+                inner += jump(y * w + x, y * w + x + 1);
                 inner_n += 1;
             }
             if y + 1 < h {
-                inner += jump(px(x, y), px(x, y + 1));
+                inner += jump(y * w + x, (y + 1) * w + x);
                 inner_n += 1;
             }
         }
-        wrap += jump(px(w - 1, y), px(0, y));
+        wrap += jump(y * w + w - 1, y * w);
         wrap_n += 1;
     }
     for x in 0..w {
-        wrap += jump(px(x, h - 1), px(x, 0));
+        wrap += jump((h - 1) * w + x, x);
         wrap_n += 1;
     }
     let inner = inner / inner_n.max(1) as f64;

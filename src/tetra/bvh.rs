@@ -264,6 +264,42 @@ impl Bvh {
         out.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
     }
 
+    /// The crossings of the segment `a`..`b` through the triangles, each
+    /// as (parameter along the segment, +1 where the triangle's normal
+    /// points along the segment, -1 against it), unsorted; `None` when one
+    /// is not clean: the segment passes within a hair of a triangle's edge
+    /// or corner, or lies in its plane, where a crossing could be counted
+    /// twice or missed.
+    pub fn signed_crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<(f64, i8)>) -> Option<()> {
+        out.clear();
+        if self.nodes.is_empty() {
+            return Some(());
+        }
+        let dir = b - a;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let i = stack[top];
+            let node = &self.nodes[i as usize];
+            if !segment_meets_box(a, dir, node.lo, node.hi) {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
+                    if let Some(hit) = signed_crossing(a, dir, t)? {
+                        out.push(hit);
+                    }
+                }
+            } else {
+                stack[top] = node.index;
+                stack[top + 1] = i + 1;
+                top += 2;
+            }
+        }
+        Some(())
+    }
+
     /// The box of every triangle (a point at the origin for none).
     pub fn bounds(&self) -> (DVec3, DVec3) {
         self.nodes
@@ -387,6 +423,71 @@ fn segment_triangle(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<f64> {
     }
     let tt = e2.dot(q) * inv;
     (0.0..=1.0).contains(&tt).then_some(tt)
+}
+
+/// Whether the segment `a + s dir` (s in 0..1) meets the box grown by a
+/// hair, a segment in one of its faces' planes included (the slab test
+/// with infinite reciprocals gives NaN there and misses it), so no
+/// triangle it touches is culled before `signed_crossing` can call the
+/// touch not clean.
+fn segment_meets_box(a: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let pad = CLEAN * (hi - lo).max_element() + f64::MIN_POSITIVE;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..3 {
+        let (l, h) = (lo[k] - pad, hi[k] + pad);
+        if dir[k] == 0.0 {
+            if a[k] < l || a[k] > h {
+                return false;
+            }
+        } else {
+            let (u, v) = ((l - a[k]) / dir[k], (h - a[k]) / dir[k]);
+            t0 = t0.max(u.min(v));
+            t1 = t1.min(u.max(v));
+        }
+    }
+    t0 <= t1
+}
+
+/// Relative distance from a triangle's edges (in barycentric units) and
+/// from its plane within which a crossing is not clean.
+const CLEAN: f64 = 1e-9;
+
+/// The crossing of the segment `a + s dir` (s in 0..1) through `t`, as
+/// `signed_crossings` gives it: `Some(None)` for none, `None` for one not
+/// clean. Moller-Trumbore, with the edge tests widened by `CLEAN` to find
+/// the near misses.
+fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, i8)>> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    let normal = e1.cross(e2);
+    let s = a - t[0];
+    if det.abs() <= CLEAN * normal.length() * dir.length() {
+        // Parallel to the plane: a miss unless it lies in it.
+        let off_plane = s.dot(normal).abs();
+        let clear = off_plane > CLEAN * normal.length() * (dir.length() + e1.length());
+        let on_line_segment_box = {
+            let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+            let (sa, sb) = (a.min(a + dir), a.max(a + dir));
+            (sa.cmple(hi) & sb.cmpge(lo)).all()
+        };
+        return (clear || !on_line_segment_box).then_some(None);
+    }
+    let inv = 1.0 / det;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = dir.dot(q) * inv;
+    let tt = e2.dot(q) * inv;
+    let w = 1.0 - u - v;
+    if u < -CLEAN || v < -CLEAN || w < -CLEAN || !(-CLEAN..=1.0 + CLEAN).contains(&tt) {
+        return Some(None);
+    }
+    if u <= CLEAN || v <= CLEAN || w <= CLEAN || tt <= CLEAN || tt >= 1.0 - CLEAN {
+        return None;
+    }
+    // det = -dir . (e1 x e2): the normal points along the segment when det < 0.
+    Some(Some((tt, if det < 0.0 { 1 } else { -1 })))
 }
 
 /// Closest point to `p` on the triangle `t`, by the Voronoi region of `p`

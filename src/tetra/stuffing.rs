@@ -48,7 +48,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::mesh::{TetMesh, signed_volume};
-use super::winding::{CoarseSigns, Winding, sign_of};
+use super::winding::{CoarseSigns, Winding, sign_of, signs_along};
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::progress::{self, Progress};
@@ -304,6 +304,12 @@ pub(crate) trait Background: Sync {
     fn num_chunks(&self) -> usize;
     /// The tets of chunk `i`, positively oriented, in a fixed order.
     fn tets_of_chunk(&self, i: usize, emit: &mut dyn FnMut([u32; 4]));
+    /// The vertices as rows along x, when they are: consecutive blocks of
+    /// (vertices in the block, vertices in each of its rows), each row's
+    /// vertices `h` apart in index order, its ends outside the surface.
+    fn rows(&self) -> Option<[(usize, usize); 2]> {
+        None
+    }
 }
 
 /// The slabs `tets_of_slab` walks, as chunks: every axis, every slab.
@@ -349,6 +355,12 @@ impl Background for Lattice {
         }
         self.tets_of_slab(axis, slab, emit);
     }
+    /// Corners in rows of x + 1, then centres in rows of x; a spare cell
+    /// on every side keeps each row's ends outside (`Lattice::covering`).
+    fn rows(&self) -> Option<[(usize, usize); 2]> {
+        let [x, y, z] = self.cubes;
+        Some([(self.num_corners(), x + 1), (x * y * z, x)])
+    }
 }
 
 /// `stuff_lattice`, also giving the final sign of every background vertex
@@ -362,25 +374,45 @@ pub(crate) fn stuff_background(
 
     // 2. f = 1/2 - w at every lattice vertex: its sign is all later steps use.
     progress.stage("winding numbers", n as u64);
-    let coarse = winding
-        .closed()
-        .then(|| CoarseSigns::new(winding, lattice.h()));
+    let rows = lattice.rows().filter(|_| winding.closed());
+    let coarse =
+        (winding.closed() && rows.is_none()).then(|| CoarseSigns::new(winding, lattice.h()));
     let mut sign = vec![0i8; n];
-    sign.par_chunks_mut(4096)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            if progress.cancelled() {
-                return;
-            }
-            for (k, s) in chunk.iter_mut().enumerate() {
-                let p = lattice.position((c * 4096 + k) as u32);
-                *s = match coarse.as_ref().and_then(|g| g.sign_at(p)) {
-                    Some(known) => known,
-                    None => sign_of(winding.at(p)),
-                };
-            }
-            progress.advance(chunk.len() as u64);
-        });
+    if let Some(blocks) = rows {
+        let (mut rest, mut first) = (&mut sign[..], 0);
+        let step = DVec3::new(lattice.h(), 0.0, 0.0);
+        for (count, len) in blocks {
+            let (block, tail) = std::mem::take(&mut rest).split_at_mut(count);
+            block
+                .par_chunks_mut(len)
+                .enumerate()
+                .for_each_init(Vec::new, |crossings, (r, row)| {
+                    if progress.cancelled() {
+                        return;
+                    }
+                    let a = lattice.position((first + r * len) as u32);
+                    signs_along(winding, a, step, row, crossings);
+                    progress.advance(len as u64);
+                });
+            (rest, first) = (tail, first + count);
+        }
+    } else {
+        sign.par_chunks_mut(4096)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                if progress.cancelled() {
+                    return;
+                }
+                for (k, s) in chunk.iter_mut().enumerate() {
+                    let p = lattice.position((c * 4096 + k) as u32);
+                    *s = match coarse.as_ref().and_then(|g| g.sign_at(p)) {
+                        Some(known) => known,
+                        None => sign_of(winding.at(p)),
+                    };
+                }
+                progress.advance(chunk.len() as u64);
+            });
+    }
     progress::check(progress)?;
     if !sign.contains(&-1) {
         return Err(Error::invalid(format!(
@@ -780,6 +812,89 @@ mod tests {
 
     fn unit(seed: u64, i: u64, k: u64) -> f64 {
         crate::rng::unit(seed, &[i, k])
+    }
+
+    /// The signs from one line per lattice row are the winding numbers'
+    /// signs at every lattice vertex: on a sphere, a torus, two spheres
+    /// overlapping (winding number 2 inside both) and a cube whose faces
+    /// and edges lie on lattice rows (every crossing there not clean, so
+    /// those rows take the winding number point by point).
+    #[test]
+    fn signs_by_rows_are_the_winding_numbers_signs() {
+        use crate::mesh::shapes::{icosphere, torus};
+        let shifted = |mut m: TriMesh, by: DVec3| {
+            for p in &mut m.positions {
+                *p += by;
+            }
+            m
+        };
+        let mut spheres = icosphere(3);
+        let other = shifted(icosphere(3), DVec3::new(0.7, 0.2, 0.1));
+        let base = spheres.positions.len() as u32;
+        spheres.positions.extend(&other.positions);
+        spheres
+            .triangles
+            .extend(other.triangles.iter().map(|f| f.map(|v| v + base)));
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2) as f64) - 0.5)
+            .collect();
+        let cube = TriMesh {
+            positions: corners,
+            triangles: vec![
+                [0, 2, 1],
+                [1, 2, 3],
+                [4, 5, 6],
+                [5, 7, 6],
+                [0, 1, 4],
+                [1, 5, 4],
+                [2, 6, 3],
+                [3, 6, 7],
+                [0, 4, 2],
+                [2, 4, 6],
+                [1, 3, 5],
+                [3, 7, 5],
+            ],
+            facets: None,
+            uvs: None,
+        };
+        for (name, mesh, h) in [
+            ("sphere", icosphere(3), 0.07),
+            ("torus", torus(1.0, 0.3, 40, 16), 0.05),
+            ("two spheres", spheres, 0.06),
+            ("cube", cube, 0.125),
+        ] {
+            let winding = Winding::new(&mesh);
+            assert!(winding.closed(), "{name}");
+            let (lo, hi) = winding.bvh.bounds();
+            let lattice = Lattice::covering(lo, hi, h);
+            let mut crossings = Vec::new();
+            let (mut first, mut inside) = (0, 0);
+            for (count, len) in lattice.rows().unwrap() {
+                for r in 0..count / len {
+                    let start = first + r * len;
+                    let mut by_rows = vec![0i8; len];
+                    let a = lattice.position(start as u32);
+                    signs_along(&winding, a, DVec3::X * h, &mut by_rows, &mut crossings);
+                    for (k, s) in by_rows.iter().enumerate() {
+                        let p = lattice.position((start + k) as u32);
+                        assert_eq!(
+                            *s,
+                            sign_of(winding.at(p)),
+                            "{name}: vertex {} at {p}",
+                            start + k
+                        );
+                        inside += (*s == -1) as usize;
+                    }
+                }
+                first += count;
+            }
+            assert_eq!(
+                first,
+                lattice.num_vertices(),
+                "{name}: rows cover the lattice"
+            );
+            assert!(inside > 100, "{name}: {inside} vertices inside");
+        }
     }
 
     #[test]

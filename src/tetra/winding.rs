@@ -128,6 +128,57 @@ pub(crate) struct CoarseSigns {
     points: Vec<(i8, f64)>,
 }
 
+/// `sign_of` the winding number at the points `a + k step` (k from 0 to
+/// `out.len() - 1`) of a closed surface (`Winding::closed`), both ends
+/// outside its box, from one pass of the line through its triangles:
+/// there the winding number is the signed count of the crossings ahead
+/// (scan conversion: one query per row of points instead of one per
+/// point). A row whose line passes within a hair of an edge, and a point
+/// within a hair of a crossing, take `Winding::at` instead, so the signs
+/// are the same as it gives.
+pub(crate) fn signs_along(
+    winding: &Winding,
+    a: DVec3,
+    step: DVec3,
+    out: &mut [i8],
+    crossings: &mut Vec<(f64, i8)>,
+) {
+    debug_assert!(winding.closed);
+    let last = out.len().saturating_sub(1) as f64;
+    let point = |k: usize| a + step * k as f64;
+    if out.len() < 2
+        || winding
+            .bvh
+            .signed_crossings(a, point(out.len() - 1), crossings)
+            .is_none()
+    {
+        for (k, s) in out.iter_mut().enumerate() {
+            *s = sign_of(winding.at(point(k)));
+        }
+        return;
+    }
+    crossings.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    // From the far end (winding number 0) back: each crossing passed adds
+    // its sign.
+    let mut w = 0i32;
+    let mut next = crossings.len();
+    for k in (0..out.len()).rev() {
+        let at = k as f64 / last;
+        while next > 0 && crossings[next - 1].0 > at {
+            next -= 1;
+            w += crossings[next].1 as i32;
+        }
+        let near = |c: Option<&(f64, i8)>| c.is_some_and(|c| (c.0 - at).abs() * last < 1e-9);
+        out[k] = if near(crossings.get(next)) || next > 0 && near(crossings.get(next - 1)) {
+            sign_of(winding.at(point(k)))
+        } else if w >= 1 {
+            -1
+        } else {
+            1
+        };
+    }
+}
+
 /// Lattice edges between grid points of `CoarseSigns`: at 4, a grid point
 /// stands for the 64 or so lattice vertices around it.
 const COARSE: f64 = 4.0;

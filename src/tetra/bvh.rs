@@ -234,32 +234,15 @@ impl Bvh {
     /// segment through a shared edge meets both triangles).
     pub fn segment_crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<f64>) {
         out.clear();
-        if self.nodes.is_empty() {
-            return;
-        }
         let dir = b - a;
         let inv = DVec3::ONE / dir;
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let i = stack[top];
-            let node = &self.nodes[i as usize];
-            if !segment_hits_box(a, inv, node.lo, node.hi) {
-                continue;
+        let boxes = |lo, hi| segment_hits_box(a, inv, lo, hi);
+        let _ = self.triangles_near_segment(boxes, |t| {
+            if let Some(s) = segment_triangle(a, dir, t) {
+                out.push(s);
             }
-            if node.count > 0 {
-                for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
-                    if let Some(s) = segment_triangle(a, dir, t) {
-                        out.push(s);
-                    }
-                }
-            } else {
-                stack[top] = node.index;
-                stack[top + 1] = i + 1;
-                top += 2;
-            }
-        }
+            Some(())
+        });
         out.sort_unstable_by(f64::total_cmp);
         out.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
     }
@@ -272,24 +255,38 @@ impl Bvh {
     /// twice or missed.
     pub fn signed_crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<(f64, i8)>) -> Option<()> {
         out.clear();
+        let dir = b - a;
+        let boxes = |lo, hi| segment_meets_box(a, dir, lo, hi);
+        self.triangles_near_segment(boxes, |t| {
+            if let Some(hit) = signed_crossing(a, dir, t)? {
+                out.push(hit);
+            }
+            Some(())
+        })
+    }
+
+    /// `visit` each triangle in a leaf whose box the segment meets
+    /// (`meets(lo, hi)`), until it returns `None`.
+    fn triangles_near_segment(
+        &self,
+        meets: impl Fn(DVec3, DVec3) -> bool,
+        mut visit: impl FnMut(&[DVec3; 3]) -> Option<()>,
+    ) -> Option<()> {
         if self.nodes.is_empty() {
             return Some(());
         }
-        let dir = b - a;
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
             let i = stack[top];
             let node = &self.nodes[i as usize];
-            if !segment_meets_box(a, dir, node.lo, node.hi) {
+            if !meets(node.lo, node.hi) {
                 continue;
             }
             if node.count > 0 {
                 for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
-                    if let Some(hit) = signed_crossing(a, dir, t)? {
-                        out.push(hit);
-                    }
+                    visit(t)?;
                 }
             } else {
                 stack[top] = node.index;
@@ -384,21 +381,6 @@ fn box_distance2(q: DVec3, node: &Node) -> f64 {
     d.length_squared()
 }
 
-/// Slab test of the segment `a + t dir`, t in [0, 1], against a box;
-/// `inv` is `1 / dir` (infinite components are handled by IEEE rules).
-#[inline]
-fn segment_hits_box(a: DVec3, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
-    let t0 = (lo - a) * inv;
-    let t1 = (hi - a) * inv;
-    let tmin = t0.min(t1);
-    let tmax = t0.max(t1);
-    // NaN (0 * inf on a slab boundary) compares false and is skipped by
-    // max/min, which treat the segment as inside that slab.
-    let enter = tmin.max_element().max(0.0);
-    let exit = tmax.min_element().min(1.0);
-    enter <= exit + 1e-12
-}
-
 /// Parameter of the segment `a + t dir` (t in [0, 1]) where it meets the
 /// triangle, edges and corners included (Moeller and Trumbore 1997).
 #[inline]
@@ -425,11 +407,30 @@ fn segment_triangle(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<f64> {
     (0.0..=1.0).contains(&tt).then_some(tt)
 }
 
+/// Slab test of the segment `a + t dir`, t in [0, 1], against a box;
+/// `inv` is `1 / dir`. Fast, but a segment lying in the plane of one of
+/// the box's faces gives 0 * inf = NaN there, which the vector min and max
+/// may carry through, culling the box: a miss `segment_crossings`' root
+/// finding survives (it bisects), `signed_crossings` would not
+/// (`segment_meets_box`).
+#[inline]
+fn segment_hits_box(a: DVec3, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    let t0 = (lo - a) * inv;
+    let t1 = (hi - a) * inv;
+    let tmin = t0.min(t1);
+    let tmax = t0.max(t1);
+    // NaN (0 * inf on a slab boundary) compares false and is skipped by
+    // max/min, which treat the segment as inside that slab.
+    let enter = tmin.max_element().max(0.0);
+    let exit = tmax.min_element().min(1.0);
+    enter <= exit + 1e-12
+}
+
 /// Whether the segment `a + s dir` (s in 0..1) meets the box grown by a
-/// hair, a segment in one of its faces' planes included (the slab test
-/// with infinite reciprocals gives NaN there and misses it), so no
-/// triangle it touches is culled before `signed_crossing` can call the
-/// touch not clean.
+/// hair (slab test; an axis the segment does not move along is an
+/// interval test, with no infinite reciprocal). Every triangle the
+/// segment meets or all but meets is in such a box, so `signed_crossing`
+/// sees it.
 fn segment_meets_box(a: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let pad = CLEAN * (hi - lo).max_element() + f64::MIN_POSITIVE;
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
@@ -448,14 +449,22 @@ fn segment_meets_box(a: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> bool {
     t0 <= t1
 }
 
-/// Relative distance from a triangle's edges (in barycentric units) and
-/// from its plane within which a crossing is not clean.
+/// Relative distance from a triangle's edges (in barycentric units)
+/// within which a crossing is not clean.
 const CLEAN: f64 = 1e-9;
+
+/// Sine of the angle between a segment and a triangle's plane below which
+/// the barycentric tests are not trusted: their rounding grows as one
+/// over it, past `CLEAN` for a segment grazing a triangle (a row through
+/// the edge of two faces tilted 1e-8 from it could count both or
+/// neither).
+const GRAZING: f64 = 1e-6;
 
 /// The crossing of the segment `a + s dir` (s in 0..1) through `t`, as
 /// `signed_crossings` gives it: `Some(None)` for none, `None` for one not
 /// clean. Moller-Trumbore, with the edge tests widened by `CLEAN` to find
-/// the near misses.
+/// the near misses; a segment grazing the triangle's plane is clean only
+/// when both its ends lie clearly on one side of it.
 fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, i8)>> {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
@@ -463,16 +472,11 @@ fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, 
     let det = e1.dot(p);
     let normal = e1.cross(e2);
     let s = a - t[0];
-    if det.abs() <= CLEAN * normal.length() * dir.length() {
-        // Parallel to the plane: a miss unless it lies in it.
-        let off_plane = s.dot(normal).abs();
-        let clear = off_plane > CLEAN * normal.length() * (dir.length() + e1.length());
-        let on_line_segment_box = {
-            let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
-            let (sa, sb) = (a.min(a + dir), a.max(a + dir));
-            (sa.cmple(hi) & sb.cmpge(lo)).all()
-        };
-        return (clear || !on_line_segment_box).then_some(None);
+    if det.abs() <= GRAZING * normal.length() * dir.length() {
+        let (from, to) = (s.dot(normal), (s + dir).dot(normal));
+        let margin = CLEAN * normal.length() * (dir.length() + e1.length() + e2.length());
+        let one_side = from.min(to) > margin || from.max(to) < -margin;
+        return one_side.then_some(None);
     }
     let inv = 1.0 / det;
     let u = s.dot(p) * inv;

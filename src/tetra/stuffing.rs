@@ -380,9 +380,12 @@ pub(crate) fn stuff_background(
     let mut sign = vec![0i8; n];
     if let Some(blocks) = rows {
         let (mut rest, mut first) = (&mut sign[..], 0);
-        let step = DVec3::new(lattice.h(), 0.0, 0.0);
         for (count, len) in blocks {
             let (block, tail) = std::mem::take(&mut rest).split_at_mut(count);
+            if len == 0 {
+                (rest, first) = (tail, first + count);
+                continue;
+            }
             block
                 .par_chunks_mut(len)
                 .enumerate()
@@ -390,8 +393,9 @@ pub(crate) fn stuff_background(
                     if progress.cancelled() {
                         return;
                     }
-                    let a = lattice.position((first + r * len) as u32);
-                    signs_along(winding, a, step, row, crossings);
+                    let start = first + r * len;
+                    let point = |k: usize| lattice.position((start + k) as u32);
+                    signs_along(winding, point, row, crossings);
                     progress.advance(len as u64);
                 });
             (rest, first) = (tail, first + count);
@@ -815,21 +819,23 @@ mod tests {
     }
 
     /// The signs from one line per lattice row are the winding numbers'
-    /// signs at every lattice vertex: on a sphere, a torus, two spheres
-    /// overlapping (winding number 2 inside both) and a cube whose faces
-    /// and edges lie on lattice rows (every crossing there not clean, so
-    /// those rows take the winding number point by point).
+    /// signs at every lattice vertex, and most rows take them from the
+    /// line: on a sphere, a torus, two spheres overlapping (winding number
+    /// 2 inside both), a cube whose faces and edges lie on lattice rows
+    /// (crossings there not clean: those rows take the winding number
+    /// point by point), and the cube turned 1e-8 radians about z, its
+    /// faces grazing the rows.
     #[test]
     fn signs_by_rows_are_the_winding_numbers_signs() {
         use crate::mesh::shapes::{icosphere, torus};
-        let shifted = |mut m: TriMesh, by: DVec3| {
+        let moved = |mut m: TriMesh, f: &dyn Fn(DVec3) -> DVec3| {
             for p in &mut m.positions {
-                *p += by;
+                *p = f(*p);
             }
             m
         };
         let mut spheres = icosphere(3);
-        let other = shifted(icosphere(3), DVec3::new(0.7, 0.2, 0.1));
+        let other = moved(icosphere(3), &|p| p + DVec3::new(0.7, 0.2, 0.1));
         let base = spheres.positions.len() as u32;
         spheres.positions.extend(&other.positions);
         spheres
@@ -857,24 +863,30 @@ mod tests {
             facets: None,
             uvs: None,
         };
-        for (name, mesh, h) in [
-            ("sphere", icosphere(3), 0.07),
-            ("torus", torus(1.0, 0.3, 40, 16), 0.05),
-            ("two spheres", spheres, 0.06),
-            ("cube", cube, 0.125),
+        let turn = glam::DMat3::from_rotation_z(1e-8);
+        let turned = moved(cube.clone(), &|p| turn * p);
+        // The least share of rows whose line serves: the cubes' rows in
+        // their faces' planes, or grazing them, do not.
+        for (name, mesh, h, least) in [
+            ("sphere", icosphere(3), 0.07, 0.9),
+            ("torus", torus(1.0, 0.3, 40, 16), 0.05, 0.9),
+            ("two spheres", spheres, 0.06, 0.9),
+            ("cube", cube, 0.125, 0.5),
+            ("turned cube", turned, 0.125, 0.5),
         ] {
             let winding = Winding::new(&mesh);
             assert!(winding.closed(), "{name}");
             let (lo, hi) = winding.bvh.bounds();
             let lattice = Lattice::covering(lo, hi, h);
             let mut crossings = Vec::new();
-            let (mut first, mut inside) = (0, 0);
+            let (mut first, mut inside, mut rows, mut by_lines) = (0, 0, 0, 0);
             for (count, len) in lattice.rows().unwrap() {
                 for r in 0..count / len {
                     let start = first + r * len;
                     let mut by_rows = vec![0i8; len];
-                    let a = lattice.position(start as u32);
-                    signs_along(&winding, a, DVec3::X * h, &mut by_rows, &mut crossings);
+                    let point = |k: usize| lattice.position((start + k) as u32);
+                    rows += 1;
+                    by_lines += signs_along(&winding, point, &mut by_rows, &mut crossings) as usize;
                     for (k, s) in by_rows.iter().enumerate() {
                         let p = lattice.position((start + k) as u32);
                         assert_eq!(
@@ -888,12 +900,17 @@ mod tests {
                 }
                 first += count;
             }
+            println!("{name}: {by_lines} of {rows} rows by their line, {inside} vertices inside");
             assert_eq!(
                 first,
                 lattice.num_vertices(),
                 "{name}: rows cover the lattice"
             );
             assert!(inside > 100, "{name}: {inside} vertices inside");
+            assert!(
+                by_lines as f64 >= least * rows as f64,
+                "{name}: {by_lines} of {rows} rows by their line"
+            );
         }
     }
 

@@ -128,38 +128,43 @@ pub(crate) struct CoarseSigns {
     points: Vec<(i8, f64)>,
 }
 
-/// `sign_of` the winding number at the points `a + k step` (k from 0 to
-/// `out.len() - 1`) of a closed surface (`Winding::closed`), both ends
-/// outside its box, from one pass of the line through its triangles:
-/// there the winding number is the signed count of the crossings ahead
-/// (scan conversion: one query per row of points instead of one per
-/// point). A row whose line passes within a hair of an edge, and a point
-/// within a hair of a crossing, take `Winding::at` instead, so the signs
-/// are the same as it gives.
+/// `sign_of` the winding number at the points `point(k)` (k from 0 to
+/// `out.len() - 1`, evenly spaced on a line, both ends outside the box of
+/// a closed surface: `Winding::closed`), from one pass of the line through
+/// its triangles: there the winding number is the signed count of the
+/// crossings ahead (scan conversion: one query per row of points instead
+/// of one per point). A row whose line passes within a hair of an edge or
+/// grazes a face, and a point within a hair of a crossing, take
+/// `Winding::at` instead, so the signs are the same as it gives. Whether
+/// the crossings served (any point of the row).
 pub(crate) fn signs_along(
     winding: &Winding,
-    a: DVec3,
-    step: DVec3,
+    point: impl Fn(usize) -> DVec3,
     out: &mut [i8],
     crossings: &mut Vec<(f64, i8)>,
-) {
+) -> bool {
     debug_assert!(winding.closed);
-    let last = out.len().saturating_sub(1) as f64;
-    let point = |k: usize| a + step * k as f64;
-    if out.len() < 2
-        || winding
-            .bvh
-            .signed_crossings(a, point(out.len() - 1), crossings)
-            .is_none()
-    {
+    let by_points = |out: &mut [i8]| {
         for (k, s) in out.iter_mut().enumerate() {
             *s = sign_of(winding.at(point(k)));
         }
-        return;
+        false
+    };
+    if out.len() < 2 {
+        return by_points(out);
+    }
+    let (a, b) = (point(0), point(out.len() - 1));
+    debug_assert!({
+        let (lo, hi) = winding.bvh.bounds();
+        !(a.cmpge(lo) & a.cmple(hi)).all() && !(b.cmpge(lo) & b.cmple(hi)).all()
+    });
+    if winding.bvh.signed_crossings(a, b, crossings).is_none() {
+        return by_points(out);
     }
     crossings.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
     // From the far end (winding number 0) back: each crossing passed adds
     // its sign.
+    let last = (out.len() - 1) as f64;
     let mut w = 0i32;
     let mut next = crossings.len();
     for k in (0..out.len()).rev() {
@@ -177,6 +182,7 @@ pub(crate) fn signs_along(
             1
         };
     }
+    true
 }
 
 /// Lattice edges between grid points of `CoarseSigns`: at 4, a grid point

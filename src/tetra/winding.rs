@@ -313,7 +313,9 @@ pub fn solid_angle(q: DVec3, t: &[DVec3; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::TriMesh;
     use crate::mesh::shapes::icosphere;
+    use glam::DMat3;
 
     fn unit(seed: u64, i: u64, k: u64) -> f64 {
         crate::rng::unit(seed, &[i, k])
@@ -382,5 +384,92 @@ mod tests {
             assert!(w > 0.9, "inside point {q} has w = {w}");
         }
         assert!(winding.at(DVec3::new(0.0, 0.0, 1.5)) < 0.5);
+    }
+
+    /// The signs from one line per row of points (rows along x, h apart,
+    /// ends a cell outside the surface's box, as the stuffing lattice's)
+    /// are the winding numbers' signs at every point, and most rows take
+    /// them from the line: on a sphere, a torus, two spheres overlapping (winding number
+    /// 2 inside both), a cube whose faces and edges lie on lattice rows
+    /// (crossings there not clean: those rows take the winding number
+    /// point by point), and the cube turned 1e-8 radians about z, its
+    /// faces grazing the rows.
+    #[test]
+    fn signs_by_rows_are_the_winding_numbers_signs() {
+        use crate::mesh::shapes::{icosphere, torus};
+        let moved = |mut m: TriMesh, f: &dyn Fn(DVec3) -> DVec3| {
+            for p in &mut m.positions {
+                *p = f(*p);
+            }
+            m
+        };
+        let mut spheres = icosphere(3);
+        let other = moved(icosphere(3), &|p| p + DVec3::new(0.7, 0.2, 0.1));
+        let base = spheres.positions.len() as u32;
+        spheres.positions.extend(&other.positions);
+        spheres
+            .triangles
+            .extend(other.triangles.iter().map(|f| f.map(|v| v + base)));
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2) as f64) - 0.5)
+            .collect();
+        let cube = TriMesh {
+            positions: corners,
+            triangles: vec![
+                [0, 2, 1],
+                [1, 2, 3],
+                [4, 5, 6],
+                [5, 7, 6],
+                [0, 1, 4],
+                [1, 5, 4],
+                [2, 6, 3],
+                [3, 6, 7],
+                [0, 4, 2],
+                [2, 4, 6],
+                [1, 3, 5],
+                [3, 7, 5],
+            ],
+            facets: None,
+            uvs: None,
+        };
+        let turn = DMat3::from_rotation_z(1e-8);
+        let turned = moved(cube.clone(), &|p| turn * p);
+        // The least share of rows whose line serves: the cubes' rows in
+        // their faces' planes, or grazing them, do not.
+        for (name, mesh, h, least) in [
+            ("sphere", icosphere(3), 0.07, 0.9),
+            ("torus", torus(1.0, 0.3, 40, 16), 0.05, 0.9),
+            ("two spheres", spheres, 0.06, 0.9),
+            ("cube", cube, 0.125, 0.5),
+            ("turned cube", turned, 0.125, 0.5),
+        ] {
+            let winding = Winding::new(&mesh);
+            assert!(winding.closed(), "{name}");
+            let (lo, hi) = winding.bvh.bounds();
+            let cells = ((hi - lo) / h).ceil().as_uvec3() + 2;
+            let corner = (lo + hi) / 2.0 - cells.as_dvec3() * h / 2.0;
+            let mut crossings = Vec::new();
+            let (mut inside, mut rows, mut by_lines) = (0, 0, 0);
+            // The corners' rows, then the cube centres' (the BCC lattice's).
+            let corners = (0..=cells.y).flat_map(|j| (0..=cells.z).map(move |k| (j, k, 0.0)));
+            let centres = (0..cells.y).flat_map(|j| (0..cells.z).map(move |k| (j, k, 0.5)));
+            for (j, k, half) in corners.chain(centres) {
+                let len = cells.x as usize + 1 - (half > 0.0) as usize;
+                let at = |i: usize| corner + (DVec3::new(i as f64, j as f64, k as f64) + half) * h;
+                let mut by_rows = vec![0i8; len];
+                rows += 1;
+                by_lines += signs_along(&winding, at, &mut by_rows, &mut crossings) as usize;
+                for (i, s) in by_rows.iter().enumerate() {
+                    assert_eq!(*s, sign_of(winding.at(at(i))), "{name}: at {}", at(i));
+                    inside += (*s == -1) as usize;
+                }
+            }
+            println!("{name}: {by_lines} of {rows} rows by their line, {inside} vertices inside");
+            assert!(inside > 100, "{name}: {inside} vertices inside");
+            assert!(
+                by_lines as f64 >= least * rows as f64,
+                "{name}: {by_lines} of {rows} rows by their line"
+            );
+        }
     }
 }

@@ -249,11 +249,17 @@ impl Bvh {
 
     /// The crossings of the segment `a`..`b` through the triangles, each
     /// as (parameter along the segment, +1 where the triangle's normal
-    /// points along the segment, -1 against it), unsorted; `None` when one
-    /// is not clean: the segment passes within a hair of a triangle's edge
-    /// or corner, or lies in its plane, where a crossing could be counted
+    /// points along the segment, -1 against it, a bound on the parameter's
+    /// rounding), unsorted; `None` when one is not clean: the segment
+    /// passes within its rounding (or a hair) of a triangle's edge or
+    /// corner, or grazes its plane, where a crossing could be counted
     /// twice or missed.
-    pub fn signed_crossings(&self, a: DVec3, b: DVec3, out: &mut Vec<(f64, i8)>) -> Option<()> {
+    pub fn signed_crossings(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        out: &mut Vec<(f64, i8, f64)>,
+    ) -> Option<()> {
         out.clear();
         let dir = b - a;
         let boxes = |lo, hi| segment_meets_box(a, dir, lo, hi);
@@ -419,8 +425,6 @@ fn segment_hits_box(a: DVec3, inv: DVec3, lo: DVec3, hi: DVec3) -> bool {
     let t1 = (hi - a) * inv;
     let tmin = t0.min(t1);
     let tmax = t0.max(t1);
-    // NaN (0 * inf on a slab boundary) compares false and is skipped by
-    // max/min, which treat the segment as inside that slab.
     let enter = tmin.max_element().max(0.0);
     let exit = tmax.min_element().min(1.0);
     enter <= exit + 1e-12
@@ -449,32 +453,35 @@ fn segment_meets_box(a: DVec3, dir: DVec3, lo: DVec3, hi: DVec3) -> bool {
     t0 <= t1
 }
 
-/// Relative distance from a triangle's edges (in barycentric units)
-/// within which a crossing is not clean.
+/// Barycentric distance from a triangle's edges within which a crossing
+/// is not clean, beside the tests' own rounding (`signed_crossing`).
 const CLEAN: f64 = 1e-9;
 
 /// Sine of the angle between a segment and a triangle's plane below which
-/// the barycentric tests are not trusted: their rounding grows as one
-/// over it, past `CLEAN` for a segment grazing a triangle (a row through
-/// the edge of two faces tilted 1e-8 from it could count both or
-/// neither).
+/// the barycentric tests are not used at all: a segment grazing a face is
+/// clean only with both ends clearly on one side of its plane.
 const GRAZING: f64 = 1e-6;
 
 /// The crossing of the segment `a + s dir` (s in 0..1) through `t`, as
 /// `signed_crossings` gives it: `Some(None)` for none, `None` for one not
-/// clean. Moller-Trumbore, with the edge tests widened by `CLEAN` to find
-/// the near misses; a segment grazing the triangle's plane is clean only
-/// when both its ends lie clearly on one side of it.
-fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, i8)>> {
+/// clean. Moller-Trumbore, whose barycentric coordinates and parameter
+/// round by about eps |a - t0| |dir| |e| / |det| and eps |a - t0| |e|^2 /
+/// |det| (the row's length over the triangle's size, over the sine of
+/// their angle): an edge test
+/// within that bound, widened by `CLEAN`, calls the crossing not clean,
+/// and the parameter's bound goes with it, so a point of the row that
+/// close takes its winding number instead.
+fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, i8, f64)>> {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
     let p = dir.cross(e2);
     let det = e1.dot(p);
     let normal = e1.cross(e2);
     let s = a - t[0];
-    if det.abs() <= GRAZING * normal.length() * dir.length() {
+    let (ls, le, ld) = (s.length(), e1.length() + e2.length(), dir.length());
+    if det.abs() <= GRAZING * normal.length() * ld {
         let (from, to) = (s.dot(normal), (s + dir).dot(normal));
-        let margin = CLEAN * normal.length() * (dir.length() + e1.length() + e2.length());
+        let margin = CLEAN * normal.length() * (ld + le);
         let one_side = from.min(to) > margin || from.max(to) < -margin;
         return one_side.then_some(None);
     }
@@ -484,14 +491,19 @@ fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, 
     let v = dir.dot(q) * inv;
     let tt = e2.dot(q) * inv;
     let w = 1.0 - u - v;
-    if u < -CLEAN || v < -CLEAN || w < -CLEAN || !(-CLEAN..=1.0 + CLEAN).contains(&tt) {
+    // Each quotient's rounding: a few eps of its numerator's and the
+    // determinant's terms, over the determinant (all units cancel).
+    let eps = 16.0 * f64::EPSILON / det.abs();
+    let edge = CLEAN + eps * (ls + le) * le * (ld + le);
+    let end = CLEAN + eps * (ls + ld) * le * le;
+    if u < -edge || v < -edge || w < -edge || !(-end..=1.0 + end).contains(&tt) {
         return Some(None);
     }
-    if u <= CLEAN || v <= CLEAN || w <= CLEAN || tt <= CLEAN || tt >= 1.0 - CLEAN {
+    if u <= edge || v <= edge || w <= edge || tt <= end || tt >= 1.0 - end {
         return None;
     }
     // det = -dir . (e1 x e2): the normal points along the segment when det < 0.
-    Some(Some((tt, if det < 0.0 { 1 } else { -1 })))
+    Some(Some((tt, if det < 0.0 { 1 } else { -1 }, end)))
 }
 
 /// Closest point to `p` on the triangle `t`, by the Voronoi region of `p`

@@ -363,22 +363,25 @@ impl Background for Lattice {
     }
 }
 
-/// `stuff_lattice`, also giving the final sign of every background vertex
-/// (0 where it was warped to the surface), which the graded lattice checks.
-pub(crate) fn stuff_background(
-    winding: &Winding,
-    lattice: &impl Background,
-    progress: &dyn Progress,
-) -> Result<(TetMesh, Vec<i8>)> {
+/// `sign_of` the winding number at every vertex of the background: by
+/// rows (`signs_along`) where the surface is closed and the vertices lie
+/// in rows, else vertex by vertex (`CoarseSigns` sparing most queries of a
+/// closed surface). Stops early, leaving zeros, when cancelled.
+fn lattice_signs(winding: &Winding, lattice: &impl Background, progress: &dyn Progress) -> Vec<i8> {
     let n = lattice.num_vertices();
-
-    // 2. f = 1/2 - w at every lattice vertex: its sign is all later steps use.
-    progress.stage("winding numbers", n as u64);
     let rows = lattice.rows().filter(|_| winding.closed());
     let coarse =
         (winding.closed() && rows.is_none()).then(|| CoarseSigns::new(winding, lattice.h()));
     let mut sign = vec![0i8; n];
     if let Some(blocks) = rows {
+        debug_assert!(
+            blocks.iter().map(|b| b.0).sum::<usize>() == n
+                && blocks.iter().all(|&(count, len)| if len == 0 {
+                    count == 0
+                } else {
+                    count % len == 0
+                })
+        );
         let (mut rest, mut first) = (&mut sign[..], 0);
         for (count, len) in blocks {
             let (block, tail) = std::mem::take(&mut rest).split_at_mut(count);
@@ -417,6 +420,21 @@ pub(crate) fn stuff_background(
                 progress.advance(chunk.len() as u64);
             });
     }
+    sign
+}
+
+/// `stuff_lattice`, also giving the final sign of every background vertex
+/// (0 where it was warped to the surface), which the graded lattice checks.
+pub(crate) fn stuff_background(
+    winding: &Winding,
+    lattice: &impl Background,
+    progress: &dyn Progress,
+) -> Result<(TetMesh, Vec<i8>)> {
+    let n = lattice.num_vertices();
+
+    // 2. f = 1/2 - w at every lattice vertex: its sign is all later steps use.
+    progress.stage("winding numbers", n as u64);
+    let mut sign = lattice_signs(winding, lattice, progress);
     progress::check(progress)?;
     if !sign.contains(&-1) {
         return Err(Error::invalid(format!(
@@ -816,6 +834,21 @@ mod tests {
 
     fn unit(seed: u64, i: u64, k: u64) -> f64 {
         crate::rng::unit(seed, &[i, k])
+    }
+
+    /// The signs by rows, wired through the lattice's blocks of corners and
+    /// centres: every vertex has its own winding number's sign.
+    #[test]
+    fn every_vertex_takes_its_sign_from_its_own_row() {
+        let winding = Winding::new(&crate::mesh::shapes::icosphere(3));
+        let (lo, hi) = winding.bvh.bounds();
+        let lattice = Lattice::covering(lo, hi, 0.1);
+        let sign = lattice_signs(&winding, &lattice, &crate::progress::Silent);
+        for (v, &s) in sign.iter().enumerate() {
+            let p = lattice.position(v as u32);
+            assert_eq!(s, sign_of(winding.at(p)), "vertex {v} at {p}");
+        }
+        assert!(sign.contains(&-1) && sign.contains(&1));
     }
 
     #[test]

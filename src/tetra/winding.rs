@@ -133,15 +133,16 @@ pub(crate) struct CoarseSigns {
 /// a closed surface: `Winding::closed`), from one pass of the line through
 /// its triangles: there the winding number is the signed count of the
 /// crossings ahead (scan conversion: one query per row of points instead
-/// of one per point). A row whose line passes within a hair of an edge or
-/// grazes a face, and a point within a hair of a crossing, take
-/// `Winding::at` instead, so the signs are the same as it gives. Whether
-/// the crossings served (any point of the row).
+/// of one per point). A row whose line passes within its rounding of an
+/// edge or grazes a face, a row whose ends are not outside the box, and a
+/// point within its rounding of a crossing take `Winding::at` instead, so
+/// the signs are the ones it gives. Whether the crossings served (any
+/// point of the row).
 pub(crate) fn signs_along(
     winding: &Winding,
     point: impl Fn(usize) -> DVec3,
     out: &mut [i8],
-    crossings: &mut Vec<(f64, i8)>,
+    crossings: &mut Vec<(f64, i8, f64)>,
 ) -> bool {
     debug_assert!(winding.closed);
     let by_points = |out: &mut [i8]| {
@@ -154,11 +155,9 @@ pub(crate) fn signs_along(
         return by_points(out);
     }
     let (a, b) = (point(0), point(out.len() - 1));
-    debug_assert!({
-        let (lo, hi) = winding.bvh.bounds();
-        !(a.cmpge(lo) & a.cmple(hi)).all() && !(b.cmpge(lo) & b.cmple(hi)).all()
-    });
-    if winding.bvh.signed_crossings(a, b, crossings).is_none() {
+    let (lo, hi) = winding.bvh.bounds();
+    let outside = |p: DVec3| !(p.cmpge(lo) & p.cmple(hi)).all();
+    if !outside(a) || !outside(b) || winding.bvh.signed_crossings(a, b, crossings).is_none() {
         return by_points(out);
     }
     crossings.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
@@ -173,7 +172,8 @@ pub(crate) fn signs_along(
             next -= 1;
             w += crossings[next].1 as i32;
         }
-        let near = |c: Option<&(f64, i8)>| c.is_some_and(|c| (c.0 - at).abs() * last < 1e-9);
+        let near =
+            |c: Option<&(f64, i8, f64)>| c.is_some_and(|c| (c.0 - at).abs() <= c.2 + 1e-9 / last);
         out[k] = if near(crossings.get(next)) || next > 0 && near(crossings.get(next - 1)) {
             sign_of(winding.at(point(k)))
         } else if w >= 1 {

@@ -239,7 +239,7 @@ fn every_entry_states_its_capture_and_surfaces_are_wet() {
 #[test]
 fn matching_a_tissue_moves_its_colours_and_keeps_its_tiling() {
     use organtex::db::build::{graded_colour, stats_of};
-    use organtex::db::colour::{Grade, Grading, LabStats};
+    use organtex::db::colour::{Grade, Grading, LabStats, to_lab};
     use organtex::synth::quality::{Rgb, seam, seam_by};
     let db = Database::open(&shipped()).unwrap();
     let ids = ["porcine-colon".to_string(), "colon-mucosa".to_string()];
@@ -278,14 +278,7 @@ fn matching_a_tissue_moves_its_colours_and_keeps_its_tiling() {
         })
     };
     let lab_seams = |img: &image::RgbImage| -> [f64; 3] {
-        use palette::{FromColor, Lab, Srgb};
-        let labs: Vec<[f32; 3]> = img
-            .pixels()
-            .map(|p| {
-                let lab = Lab::from_color(Srgb::new(p[0], p[1], p[2]).into_format::<f32>());
-                [lab.l, lab.a, lab.b]
-            })
-            .collect();
+        let labs: Vec<[f32; 3]> = img.pixels().map(|p| to_lab(p.0)).collect();
         let (w, h) = (img.width() as usize, img.height() as usize);
         std::array::from_fn(|c| seam_by(w, h, |i, j| (labs[i][c] - labs[j][c]).abs() as f64))
     };

@@ -16,7 +16,8 @@ pub struct LabStats {
     pub spread: [f64; 3],
 }
 
-fn to_lab(rgb: [u8; 3]) -> [f32; 3] {
+/// An sRGB colour in CIELAB (D65).
+pub fn to_lab(rgb: [u8; 3]) -> [f32; 3] {
     let lab = Lab::from_color(Srgb::new(rgb[0], rgb[1], rgb[2]).into_format::<f32>());
     [lab.l, lab.a, lab.b]
 }

@@ -467,10 +467,9 @@ const GRAZING: f64 = 1e-6;
 /// clean. Moller-Trumbore, whose barycentric coordinates and parameter
 /// round by about eps |a - t0| |dir| |e| / |det| and eps |a - t0| |e|^2 /
 /// |det| (the row's length over the triangle's size, over the sine of
-/// their angle): an edge test
-/// within that bound, widened by `CLEAN`, calls the crossing not clean,
-/// and the parameter's bound goes with it, so a point of the row that
-/// close takes its winding number instead.
+/// their angle): an edge test within that bound, widened by `CLEAN`, calls
+/// the crossing not clean, and the parameter's bound goes with it, so a
+/// point of the row that close takes its winding number instead.
 fn signed_crossing(a: DVec3, dir: DVec3, t: &[DVec3; 3]) -> Option<Option<(f64, i8, f64)>> {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];

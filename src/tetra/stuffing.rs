@@ -382,26 +382,24 @@ fn lattice_signs(winding: &Winding, lattice: &impl Background, progress: &dyn Pr
                     count % len == 0
                 })
         );
-        let (mut rest, mut first) = (&mut sign[..], 0);
+        let mut first = 0;
         for (count, len) in blocks {
-            let (block, tail) = std::mem::take(&mut rest).split_at_mut(count);
-            if len == 0 {
-                (rest, first) = (tail, first + count);
-                continue;
+            // An empty block (a lattice one cube thin) has no rows to cut.
+            if count > 0 {
+                sign[first..first + count]
+                    .par_chunks_mut(len)
+                    .enumerate()
+                    .for_each_init(Vec::new, |crossings, (r, row)| {
+                        if progress.cancelled() {
+                            return;
+                        }
+                        let start = first + r * len;
+                        let point = |k: usize| lattice.position((start + k) as u32);
+                        signs_along(winding, point, row, crossings);
+                        progress.advance(len as u64);
+                    });
             }
-            block
-                .par_chunks_mut(len)
-                .enumerate()
-                .for_each_init(Vec::new, |crossings, (r, row)| {
-                    if progress.cancelled() {
-                        return;
-                    }
-                    let start = first + r * len;
-                    let point = |k: usize| lattice.position((start + k) as u32);
-                    signs_along(winding, point, row, crossings);
-                    progress.advance(len as u64);
-                });
-            (rest, first) = (tail, first + count);
+            first += count;
         }
     } else {
         sign.par_chunks_mut(4096)

@@ -389,11 +389,11 @@ mod tests {
     /// The signs from one line per row of points (rows along x, h apart,
     /// ends a cell outside the surface's box, as the stuffing lattice's)
     /// are the winding numbers' signs at every point, and most rows take
-    /// them from the line: on a sphere, a torus, two spheres overlapping (winding number
-    /// 2 inside both), a cube whose faces and edges lie on lattice rows
-    /// (crossings there not clean: those rows take the winding number
-    /// point by point), and the cube turned 1e-8 radians about z, its
-    /// faces grazing the rows.
+    /// them from the line: on a sphere, a torus, two spheres overlapping
+    /// (winding number 2 inside both), a cube whose faces and edges lie on
+    /// lattice rows (crossings there not clean: those rows take the
+    /// winding number point by point), and the cube turned 1e-8 radians
+    /// about z, its faces grazing the rows.
     #[test]
     fn signs_by_rows_are_the_winding_numbers_signs() {
         use crate::mesh::shapes::{icosphere, torus};

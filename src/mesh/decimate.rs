@@ -24,7 +24,8 @@ use crate::progress::{self, Progress};
 /// thinner, and the guard keeps them from being collapsed into better
 /// ones: rounds of flips and relaxation between the collapses even them
 /// out, and a cleanup at the end mends the faces the budget left under it
-/// (`decimate`), so every face of the result has it.
+/// where a move, a collapse or a flip can (`decimate`; on the MNI white
+/// matter at 50k faces, all of them).
 pub const MIN_ANGLE: f64 = 20.0;
 /// Nor turn a face by more than this (degrees).
 const MAX_TURN: f64 = 60.0;
@@ -103,9 +104,9 @@ struct Candidate {
 /// should it not, the collapse is the current one anyway). The heap holds
 /// every edge and the stale entries, millions for a scan's surface, and
 /// each pop walks it from top to bottom: at 16 bytes the four children of
-/// a 4-ary heap's (dary_heap) node fill one cache line, half the levels of
-/// a binary heap's and a third fewer lines than with the ends' stamps in
-/// the entry, which made pops a third of decimating a scan.
+/// a 4-ary heap's (dary_heap) node span at most two cache lines, and a 4-ary
+/// heap has half a binary heap's levels (pops were a third of decimating a
+/// scan).
 struct Entry {
     cost: f64,
     a: u32,
@@ -140,6 +141,20 @@ impl Ord for Entry {
             .total_cmp(&self.cost)
             .then_with(|| (o.a, o.b).cmp(&(self.a, self.b)))
     }
+}
+
+/// Whether a face whose normal (unnormalised) goes from `before` to
+/// `after` keeps facing the way it did: not degenerate after, and turned
+/// by no more than the angle whose cosine is `turn`. A face of no area
+/// before is held to `around` (its neighbourhood's normal) instead. False
+/// where a direction is undefined (NaN compares false).
+fn keeps_facing(before: DVec3, after: DVec3, around: DVec3, turn: f64) -> bool {
+    let reference = if before.length_squared() > 0.0 {
+        before
+    } else {
+        around
+    };
+    after.length_squared() > 0.0 && reference.normalize().dot(after.normalize()) >= turn
 }
 
 /// The smallest angle of triangle (a, b, c), degrees.
@@ -237,6 +252,16 @@ impl State {
             return None;
         }
         let turn = MAX_TURN.to_radians().cos();
+        // A face of no area has no direction of its own to keep: it keeps
+        // the two ends' faces' mean one.
+        let around: DVec3 = [a, b]
+            .iter()
+            .flat_map(|&v| self.live_faces(v))
+            .map(|f| {
+                let [x, y, z] = self.triangles[f as usize].map(|w| self.positions[w as usize]);
+                (y - x).cross(z - x)
+            })
+            .sum();
         let (mut worst_old, mut worst_new) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         for v in [a, b] {
             for f in self.live_faces(v) {
@@ -257,7 +282,7 @@ impl State {
                     (old[1] - old[0]).cross(old[2] - old[0]),
                     (new[1] - new[0]).cross(new[2] - new[0]),
                 );
-                if n1.length_squared() == 0.0 || n0.normalize().dot(n1.normalize()) < turn {
+                if !keeps_facing(n0, n1, around, turn) {
                     return None;
                 }
                 worst_new = worst_new.max(sharpness(new[0], new[1], new[2]));
@@ -339,7 +364,9 @@ impl State {
 /// relaxation evens the faces out and the collapses go on, up to
 /// `ROUNDS` times. Last, the faces still under `MIN_ANGLE` (the budget
 /// stops the collapses before their guard has mended every face it was
-/// given) are mended. Deterministic (one thread, ties broken by the edge).
+/// given) are mended where a corner's move, a collapse or a flip can (a
+/// best effort: the result's smallest angle is the caller's to report).
+/// Deterministic (one thread, ties broken by the edge).
 /// The error names why the budget was not reached.
 pub fn decimate(
     mesh: &TriMesh,
@@ -386,7 +413,8 @@ pub fn decimate(
 
 /// Rounds of collapses, each after a round of flips and relaxation.
 const ROUNDS: usize = 6;
-/// Rounds of flips and collapses of the faces under MIN_ANGLE at the end.
+/// Rounds of corner moves, collapses and flips of the faces under the
+/// cleanup's floor at the end.
 const CLEANUP_ROUNDS: usize = 8;
 /// The cleanup works on the faces under MIN_ANGLE plus this (degrees), so
 /// the angles stay at MIN_ANGLE once positions are written as 32-bit
@@ -450,8 +478,8 @@ fn collapse_to(mesh: &TriMesh, faces: usize, progress: &dyn Progress) -> Result<
     Ok(s.into_mesh())
 }
 
-/// Collapses of an edge of each face whose smallest angle is under
-/// MIN_ANGLE (a needle's short edge, or a cap's apex onto an end), where that
+/// Collapses of an edge of each face whose smallest angle is under the
+/// cleanup's floor (`cleanup_floor`; a needle's short edge, or a cap's apex onto an end), where that
 /// keeps the surface manifold, turns no face far and makes the worst angle
 /// round the edge strictly larger: what the budget stopped the greedy
 /// collapses short of. The number made.
@@ -488,8 +516,8 @@ fn collapse_needles(mesh: &mut TriMesh) -> usize {
     made
 }
 
-/// Moves of the corners of each face whose smallest angle is under
-/// MIN_ANGLE, each to the best of a few points round it in its tangent
+/// Moves of the corners of each face whose smallest angle is under the
+/// cleanup's floor (`cleanup_floor`), each to the best of a few points round it in its tangent
 /// plane (twelve directions, three steps up to a fifth of its shortest
 /// edge) where that raises the worst angle of its faces and turns none far:
 /// the optimisation-based smoothing of a vertex (Freitag and Ollivier-Gooch
@@ -551,7 +579,7 @@ fn move_corners(mesh: &mut TriMesh) -> usize {
                         let [x, y, z] = corners(t, p);
                         let [x1, y1, z1] = corners(t, to);
                         let (n0, n1) = ((y - x).cross(z - x), (y1 - x1).cross(z1 - x1));
-                        if n1.length_squared() == 0.0 || n0.normalize().dot(n1.normalize()) < turn {
+                        if !keeps_facing(n0, n1, normal, turn) {
                             new_worst = f64::INFINITY;
                             break;
                         }
@@ -694,8 +722,8 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
                 continue;
             }
             let before = sharpness(p(a), p(b), p(c)).max(sharpness(p(b), p(a), p(d)));
-            // Across a steeper crease only a pair with an angle under
-            // MIN_ANGLE, and only where the two diagonals nearly meet: the
+            // Across a steeper crease only a pair with an angle under the
+            // cleanup's floor, and only where the two diagonals nearly meet: the
             // surface moves by the tetrahedron (a, b, c, d) between the
             // pair and the flipped pair, as thick as the diagonals' lines
             // are apart.
@@ -704,7 +732,10 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
                 let apart = (p(c) - p(a)).dot(across).abs() / across.length();
                 // False where the diagonals are parallel (NaN).
                 let moves_little = apart <= FLIP_MOVE * p(a).distance(p(b));
-                if !steep || before <= floor || !moves_little {
+                // A pair folded onto itself is flat too, but a flip there
+                // would turn the smaller face over.
+                let folded = n0.normalize().dot(n1.normalize()) <= MAX_STEEP_CREASE_COS;
+                if !steep || before <= floor || !moves_little || folded {
                     continue;
                 }
             }
@@ -740,13 +771,15 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
 }
 
 /// The largest angle (degrees) between two faces whose edge may flip
-/// (unless one has an angle under MIN_ANGLE, see FLIP_MOVE).
+/// (unless, in the cleanup, one has an angle under its floor: FLIP_MOVE).
 const MAX_CREASE: f64 = 15.0;
 /// How far a flip across a steeper crease may move the surface, as a
 /// share of the flipped edge's length: a cap (a face with an angle near
 /// 180 degrees) is flat against its long edge, so flipping that edge moves
 /// the surface by little whatever the crease.
 const FLIP_MOVE: f64 = 0.1;
+/// The cosine of the steepest crease (120 degrees) such a flip may cross.
+const MAX_STEEP_CREASE_COS: f64 = -0.5;
 
 #[cfg(test)]
 mod tests {

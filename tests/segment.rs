@@ -256,7 +256,7 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
     // convoluted surface, where marching tetrahedra's slivers and the
     // gyri's thin crests leave caps that only the decimation's cleanup
     // (corner moves, collapses, flips over creases) mends.
-    let small = organtex::mesh::decimate::decimate(&mesh, 50_000, 5, &Silent).unwrap();
+    let small = organtex::mesh::decimate::decimate(&mesh, 50_000, 5, None, &Silent).unwrap();
     assert!(small.num_faces() <= 50_000);
     assert_eq!(check_surface(&small, "white matter, 50k faces"), genus);
     let ratio = small.signed_volume() / report.voxel_volume;

@@ -14,6 +14,8 @@ use std::cmp::Ordering;
 
 use glam::{DMat3, DVec3};
 
+use super::corners::{keeps_facing, move_corners, sharpness};
+use super::envelope::Envelope;
 use crate::error::{Error, Result};
 use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
@@ -143,41 +145,9 @@ impl Ord for Entry {
     }
 }
 
-/// Whether a face whose normal (unnormalised) goes from `before` to
-/// `after` keeps facing the way it did: not degenerate after, and turned
-/// by no more than the angle whose cosine is `turn`. A face of no area
-/// before is held to `around()` (its neighbourhood's normal) instead.
-/// False where a direction is undefined (NaN compares false).
-fn keeps_facing(before: DVec3, after: DVec3, around: impl FnOnce() -> DVec3, turn: f64) -> bool {
-    let reference = if before.length_squared() > 0.0 {
-        before
-    } else {
-        around()
-    };
-    after.length_squared() > 0.0 && reference.normalize().dot(after.normalize()) >= turn
-}
-
 /// The smallest angle of triangle (a, b, c), degrees.
 pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     sharpness(a, b, c).clamp(-1.0, 1.0).acos().to_degrees()
-}
-
-/// The cosine of the smallest angle of triangle (a, b, c), the largest of
-/// its angles' cosines; 1 for a triangle with a corner on another. The
-/// guards compare these rather than angles: the same order (the cosine
-/// falls as the angle grows), without an arc cosine per corner, which was
-/// a tenth of decimating a scan's surface.
-pub fn sharpness(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let cosine = |p: DVec3, q: DVec3, r: DVec3| {
-        let (u, v) = (q - p, r - p);
-        let lengths = (u.length_squared() * v.length_squared()).sqrt();
-        if lengths > 0.0 {
-            u.dot(v) / lengths
-        } else {
-            1.0
-        }
-    };
-    cosine(a, b, c).max(cosine(b, c, a)).max(cosine(c, a, b))
 }
 
 struct State {
@@ -299,6 +269,37 @@ impl State {
         Some((worst_old, worst_new))
     }
 
+    /// The faces round edge (a, b) into `around`, and those that survive
+    /// its collapse to `to`, with their corners then, into `after`.
+    fn faces_round(
+        &self,
+        a: u32,
+        b: u32,
+        to: DVec3,
+        around: &mut Vec<u32>,
+        after: &mut Vec<(u32, [DVec3; 3])>,
+    ) {
+        around.clear();
+        after.clear();
+        for f in self.live_faces(a).chain(self.live_faces(b)) {
+            if around.contains(&f) {
+                continue;
+            }
+            around.push(f);
+            let t = self.triangles[f as usize];
+            if !(t.contains(&a) && t.contains(&b)) {
+                let corners = t.map(|w| {
+                    if w == a || w == b {
+                        to
+                    } else {
+                        self.positions[w as usize]
+                    }
+                });
+                after.push((f, corners));
+            }
+        }
+    }
+
     /// The faces left, vertices in order of use.
     fn into_mesh(self) -> TriMesh {
         let faces: Vec<FaceId> = (0..self.triangles.len())
@@ -366,8 +367,10 @@ impl State {
 }
 
 /// Collapse edges of `mesh` (closed and manifold) until it has at most
-/// `faces` faces; then `relax` rounds of edge flips and tangential
-/// relaxation. Where the collapses get stuck above the budget (every
+/// `faces` faces, each round's collapses keeping that round's surface's
+/// vertices within `envelope` of the result (`envelope::Envelope`; the
+/// last round without, so the budget is reached); then `relax` rounds of
+/// edge flips and tangential relaxation. Where the collapses get stuck above the budget (every
 /// candidate would make an angle under `MIN_ANGLE`), a round of flips and
 /// relaxation evens the faces out and the collapses go on, up to
 /// `ROUNDS` times. Then the edges much shorter than the rest are
@@ -382,16 +385,21 @@ pub fn decimate(
     mesh: &TriMesh,
     faces: usize,
     relax: usize,
+    envelope: Option<f64>,
     progress: &dyn Progress,
 ) -> Result<TriMesh> {
     progress.stage("decimating", mesh.num_faces().saturating_sub(faces) as u64);
     let mut out = mesh.clone();
-    for _ in 0..ROUNDS {
+    for round in 0..ROUNDS {
         // Even out the thin faces first, so the angle guard does not hold
         // collapses back around them.
         flip_edges(&mut out, 3, false);
         relax_tangentially(&mut out, 1);
-        out = collapse_to(&out, faces, progress)?;
+        // The envelope round this round's surface (`envelope`), and none
+        // in the last round, so it never stops a budget the guards alone
+        // would reach.
+        let tolerance = envelope.filter(|_| round + 1 < ROUNDS);
+        out = collapse_to(&out, faces, tolerance, progress)?;
         if out.num_faces() <= faces {
             break;
         }
@@ -415,8 +423,9 @@ pub fn decimate(
     // corners moved, needles collapsed, caps flipped over creases, each
     // step only raising the worst angle where it acts.
     for _ in 0..CLEANUP_ROUNDS {
-        let changed =
-            move_corners(&mut out) + collapse_needles(&mut out) + flip_edges(&mut out, 2, true);
+        let changed = move_corners(&mut out, cleanup_floor(), MAX_TURN.to_radians().cos())
+            + collapse_needles(&mut out)
+            + flip_edges(&mut out, 2, true);
         relax_tangentially(&mut out, 1);
         if changed == 0 {
             break;
@@ -441,8 +450,15 @@ fn cleanup_floor() -> f64 {
 }
 
 /// Collapses until `faces` or until none is allowed.
-fn collapse_to(mesh: &TriMesh, faces: usize, progress: &dyn Progress) -> Result<TriMesh> {
+fn collapse_to(
+    mesh: &TriMesh,
+    faces: usize,
+    tolerance: Option<f64>,
+    progress: &dyn Progress,
+) -> Result<TriMesh> {
     let mut s = State::new(mesh);
+    let mut envelope = tolerance.map(|t| Envelope::new(mesh, t));
+    let (mut around, mut after) = (Vec::new(), Vec::new());
     // Heapified at once, in linear time.
     let mut heap: QuaternaryHeap<Entry> = mesh
         .triangles
@@ -476,6 +492,13 @@ fn collapse_to(mesh: &TriMesh, faces: usize, progress: &dyn Progress) -> Result<
         if !matches!(s.shapes(a, b, to, turn, &mut scratch), Some((old, new)) if new <= old.max(floor))
         {
             continue;
+        }
+        if let Some(envelope) = envelope.as_mut() {
+            s.faces_round(a, b, to, &mut around, &mut after);
+            if !envelope.allows(&around, &after) {
+                continue;
+            }
+            envelope.commit(&around);
         }
         s.collapse(a, b, to);
         live -= 2;
@@ -597,89 +620,6 @@ fn collapse_needles(mesh: &mut TriMesh) -> usize {
     }
     if made > 0 {
         *mesh = s.into_mesh();
-    }
-    made
-}
-
-/// Moves of the corners of each face whose smallest angle is under the
-/// cleanup's floor (`cleanup_floor`), each to the best of a few points round it in its tangent
-/// plane (twelve directions, three steps up to a fifth of its shortest
-/// edge) where that raises the worst angle of its faces and turns none far:
-/// the optimisation-based smoothing of a vertex (Freitag and Ollivier-Gooch
-/// 1997) by sampling, for the caps no flip or collapse mends. A move of a
-/// fifth of an edge in the tangent plane leaves the surface by about that
-/// squared times its curvature. The number made.
-fn move_corners(mesh: &mut TriMesh) -> usize {
-    let floor = cleanup_floor();
-    let turn = MAX_TURN.to_radians().cos();
-    let mut faces_at = vec![Vec::new(); mesh.num_vertices()];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            faces_at[v as usize].push(f as u32);
-        }
-    }
-    let mut made = 0;
-    for f in 0..mesh.num_faces() {
-        for v in mesh.triangles[f] {
-            let [a, b, c] = mesh.corners(f);
-            if sharpness(a, b, c) <= floor {
-                break;
-            }
-            let ring = &faces_at[v as usize];
-            let p = mesh.positions[v as usize];
-            let corners = |t: [u32; 3], at: DVec3| {
-                t.map(|w| {
-                    if w == v {
-                        at
-                    } else {
-                        mesh.positions[w as usize]
-                    }
-                })
-            };
-            let mut normal = DVec3::ZERO;
-            let mut worst = f64::NEG_INFINITY;
-            let mut shortest = f64::INFINITY;
-            for &g in ring {
-                let [x, y, z] = corners(mesh.triangles[g as usize], p);
-                normal += (y - x).cross(z - x);
-                worst = worst.max(sharpness(x, y, z));
-                for q in [x, y, z] {
-                    if q != p {
-                        shortest = shortest.min(q.distance(p));
-                    }
-                }
-            }
-            if normal.length_squared() == 0.0 || !shortest.is_finite() {
-                continue;
-            }
-            let (u, w) = normal.normalize().any_orthonormal_pair();
-            let mut best = (worst, p);
-            for step in [0.05, 0.1, 0.2] {
-                for k in 0..12 {
-                    let angle = k as f64 * std::f64::consts::PI / 6.0;
-                    let to = p + step * shortest * (angle.cos() * u + angle.sin() * w);
-                    let mut new_worst = f64::NEG_INFINITY;
-                    for &g in ring {
-                        let t = mesh.triangles[g as usize];
-                        let [x, y, z] = corners(t, p);
-                        let [x1, y1, z1] = corners(t, to);
-                        let (n0, n1) = ((y - x).cross(z - x), (y1 - x1).cross(z1 - x1));
-                        if !keeps_facing(n0, n1, || normal, turn) {
-                            new_worst = f64::INFINITY;
-                            break;
-                        }
-                        new_worst = new_worst.max(sharpness(x1, y1, z1));
-                    }
-                    if new_worst < best.0 {
-                        best = (new_worst, to);
-                    }
-                }
-            }
-            if best.0 < worst {
-                mesh.positions[v as usize] = best.1;
-                made += 1;
-            }
-        }
     }
     made
 }
@@ -891,7 +831,7 @@ mod tests {
             (shapes::torus(1.0, 0.35, 96, 36), 1),
         ] {
             let before = mesh.signed_volume();
-            let out = decimate(&mesh, mesh.num_faces() / 8, 5, &Silent).unwrap();
+            let out = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent).unwrap();
             assert!(out.num_faces() <= mesh.num_faces() / 8);
             assert_eq!(genus_closed_outward(&out), vec![genus]);
             let volume = out.signed_volume() / before;
@@ -904,15 +844,53 @@ mod tests {
                 .fold(180.0, f64::min);
             assert!(worst >= MIN_ANGLE, "smallest angle {worst}");
             // Same bytes again.
-            let again = decimate(&mesh, mesh.num_faces() / 8, 5, &Silent).unwrap();
+            let again = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent).unwrap();
             assert_eq!(again.positions, out.positions);
         }
+    }
+
+    /// The farthest vertex of `from` from the surface `to`.
+    fn farthest(from: &TriMesh, to: &TriMesh) -> f64 {
+        from.positions
+            .iter()
+            .map(|&p| {
+                (0..to.num_faces())
+                    .map(|f| crate::mesh::closest::closest_point(p, &to.corners(f)).distance(p))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn the_envelope_keeps_every_vertex_near_the_decimated_surface() {
+        // A ball with a narrow bump decimated to a sixteenth:
+        // unbounded, the collapses cut the bump down; within the envelope
+        // every vertex stays near.
+        let mut mesh = shapes::icosphere(4);
+        for p in &mut mesh.positions {
+            let off = p.normalize().angle_between(DVec3::Z);
+            *p *= 1.0 + 0.4 * (-(off / 0.15).powi(2)).exp();
+        }
+        let budget = mesh.num_faces() / 16;
+        let tolerance = 0.01;
+        let free = collapse_to(&mesh, budget, None, &Silent).unwrap();
+        assert!(farthest(&mesh, &free) > 2.0 * tolerance);
+        let kept = collapse_to(&mesh, budget, Some(tolerance), &Silent).unwrap();
+        let far = farthest(&mesh, &kept);
+        assert!(far <= tolerance, "{far}");
+        assert!(
+            kept.num_faces() < mesh.num_faces() / 2,
+            "{}",
+            kept.num_faces()
+        );
     }
 
     #[test]
     fn a_budget_below_a_tetrahedron_is_refused() {
         let mesh = shapes::icosphere(1);
-        let e = decimate(&mesh, 2, 0, &Silent).unwrap_err().to_string();
+        let e = decimate(&mesh, 2, 0, None, &Silent)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("above the budget of 2"), "{e}");
     }
 }

@@ -2,12 +2,15 @@
 //! half-edge topology, defect detection and repair, components and genus,
 //! curvature, reading and writing, and the test shapes.
 
+pub mod closest;
 pub mod components;
+pub mod corners;
 pub mod curvature;
 pub mod decimate;
 pub mod defects;
 pub(crate) mod dsu;
 pub mod edges;
+pub mod envelope;
 pub mod fans;
 pub mod graph;
 pub mod halfedge;

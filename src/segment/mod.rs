@@ -207,6 +207,12 @@ impl Smoother {
 
 /// Tangential relaxation rounds after decimating.
 const RELAX_ROUNDS: usize = 5;
+/// The decimation's envelope, voxels: each round keeps the vertices of the
+/// surface it was given within this of its result (`mesh::envelope`).
+/// Without it the white matter's thin gyri went whole at 50k faces, 6.5
+/// voxels from the decimated surface; with a quarter voxel 2.6 (and 1.2
+/// the other way, against 2.7), at 2 s more.
+const ENVELOPE_VOXELS: f64 = 0.25;
 
 /// What `mesh` measured.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -331,8 +337,10 @@ pub fn mesh(
     // In world units, where the angles the decimation keeps are the ones
     // a user measures.
     if let Some(budget) = opts.faces.filter(|&b| b < mesh.num_faces()) {
-        mesh = crate::mesh::decimate::decimate(&mesh, budget, RELAX_ROUNDS, progress)
-            .map_err(|e| e.in_file(name))?;
+        let envelope = ENVELOPE_VOXELS * volume.voxel_volume().cbrt();
+        mesh =
+            crate::mesh::decimate::decimate(&mesh, budget, RELAX_ROUNDS, Some(envelope), progress)
+                .map_err(|e| e.in_file(name))?;
     }
     let report = MeshReport {
         region_voxels,

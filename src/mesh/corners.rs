@@ -1,0 +1,125 @@
+//! A triangle's shape as the decimation's guards judge it, and the
+//! corner moves that mend the faces it leaves thin.
+
+use glam::DVec3;
+
+use super::TriMesh;
+
+/// The cosine of the smallest angle of triangle (a, b, c), the largest of
+/// its angles' cosines; 1 for a triangle with a corner on another. The
+/// guards compare these rather than angles: the same order (the cosine
+/// falls as the angle grows), without an arc cosine per corner, which was
+/// a tenth of decimating a scan's surface.
+pub fn sharpness(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let cosine = |p: DVec3, q: DVec3, r: DVec3| {
+        let (u, v) = (q - p, r - p);
+        let lengths = (u.length_squared() * v.length_squared()).sqrt();
+        if lengths > 0.0 {
+            u.dot(v) / lengths
+        } else {
+            1.0
+        }
+    };
+    cosine(a, b, c).max(cosine(b, c, a)).max(cosine(c, a, b))
+}
+
+/// Whether a face whose normal (unnormalised) goes from `before` to
+/// `after` keeps facing the way it did: not degenerate after, and turned
+/// by no more than the angle whose cosine is `turn`. A face of no area
+/// before is held to `around()` (its neighbourhood's normal) instead.
+/// False where a direction is undefined (NaN compares false).
+pub fn keeps_facing(
+    before: DVec3,
+    after: DVec3,
+    around: impl FnOnce() -> DVec3,
+    turn: f64,
+) -> bool {
+    let reference = if before.length_squared() > 0.0 {
+        before
+    } else {
+        around()
+    };
+    after.length_squared() > 0.0 && reference.normalize().dot(after.normalize()) >= turn
+}
+
+/// Moves of the corners of each face whose sharpness is above `floor`
+/// (the decimation's cleanup floor), each to the best of a few points
+/// round it in its tangent plane (twelve directions, three steps up to a
+/// fifth of its shortest edge) where that raises the worst angle of its
+/// faces and turns none past `turn` (a cosine): the optimisation-based
+/// smoothing of a vertex (Freitag and Ollivier-Gooch 1997) by sampling,
+/// for the caps no flip or collapse mends. A move of a fifth of an edge in
+/// the tangent plane leaves the surface by about that squared times its
+/// curvature. The number made.
+pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
+    let mut faces_at = vec![Vec::new(); mesh.num_vertices()];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for &v in t {
+            faces_at[v as usize].push(f as u32);
+        }
+    }
+    let mut made = 0;
+    for f in 0..mesh.num_faces() {
+        for v in mesh.triangles[f] {
+            let [a, b, c] = mesh.corners(f);
+            if sharpness(a, b, c) <= floor {
+                break;
+            }
+            let ring = &faces_at[v as usize];
+            let p = mesh.positions[v as usize];
+            let corners = |t: [u32; 3], at: DVec3| {
+                t.map(|w| {
+                    if w == v {
+                        at
+                    } else {
+                        mesh.positions[w as usize]
+                    }
+                })
+            };
+            let mut normal = DVec3::ZERO;
+            let mut worst = f64::NEG_INFINITY;
+            let mut shortest = f64::INFINITY;
+            for &g in ring {
+                let [x, y, z] = corners(mesh.triangles[g as usize], p);
+                normal += (y - x).cross(z - x);
+                worst = worst.max(sharpness(x, y, z));
+                for q in [x, y, z] {
+                    if q != p {
+                        shortest = shortest.min(q.distance(p));
+                    }
+                }
+            }
+            if normal.length_squared() == 0.0 || !shortest.is_finite() {
+                continue;
+            }
+            let (u, w) = normal.normalize().any_orthonormal_pair();
+            let mut best = (worst, p);
+            for step in [0.05, 0.1, 0.2] {
+                for k in 0..12 {
+                    let angle = k as f64 * std::f64::consts::PI / 6.0;
+                    let to = p + step * shortest * (angle.cos() * u + angle.sin() * w);
+                    let mut new_worst = f64::NEG_INFINITY;
+                    for &g in ring {
+                        let t = mesh.triangles[g as usize];
+                        let [x, y, z] = corners(t, p);
+                        let [x1, y1, z1] = corners(t, to);
+                        let (n0, n1) = ((y - x).cross(z - x), (y1 - x1).cross(z1 - x1));
+                        if !keeps_facing(n0, n1, || normal, turn) {
+                            new_worst = f64::INFINITY;
+                            break;
+                        }
+                        new_worst = new_worst.max(sharpness(x1, y1, z1));
+                    }
+                    if new_worst < best.0 {
+                        best = (new_worst, to);
+                    }
+                }
+            }
+            if best.0 < worst {
+                mesh.positions[v as usize] = best.1;
+                made += 1;
+            }
+        }
+    }
+    made
+}

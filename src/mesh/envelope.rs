@@ -1,14 +1,16 @@
-//! The envelope a decimation stays within: every vertex of the surface it
-//! started from lies within a distance of the decimated surface, the
-//! one-sided Hausdorff distance from the original that the quadric error
-//! (a sum of squares) does not bound. Each face carries the original
-//! vertices nearest it; a collapse is allowed only if every point the
-//! faces round its edge carry lies within the distance of one of the faces
-//! after it, which then carries it (Klein, Liebich and Strasser 1996,
-//! "Mesh reduction with error control", checked at the original vertices
-//! rather than over the whole surface). Without it the white matter's thin
-//! gyri were collapsed away whole: six voxels from the decimated surface
-//! at 50k faces, against one from the full-resolution one.
+//! The envelope a round of the decimation's collapses stays within: every
+//! vertex of the surface the round was given lies within a distance of the
+//! round's result, the one-sided Hausdorff distance from it at its vertices
+//! that the quadric error (a sum of squares) does not bound. Each face
+//! carries some of those vertices; a collapse is allowed only if every
+//! point the faces round its edge carry lies within the distance of one of
+//! the faces after it, which then carries it (the face that carried it
+//! while that stays within, else the first that is; Klein, Liebich and
+//! Strasser 1996, "Mesh reduction with error control", there with the
+//! nearest face, over the whole surface). A bound per round: `decimate`'s
+//! rounds, its last (without one) and its cleanup add to it. Without it the
+//! white matter's thin gyri were collapsed away whole: six voxels from the
+//! decimated surface at 50k faces, against one from the full-resolution one.
 
 use glam::DVec3;
 

@@ -211,7 +211,7 @@ const RELAX_ROUNDS: usize = 5;
 /// surface it was given within this of its result (`mesh::envelope`).
 /// Without it the white matter's thin gyri went whole at 50k faces, 6.5
 /// voxels from the decimated surface; with a quarter voxel 2.6 (and 1.2
-/// the other way, against 2.7), at 2 s more.
+/// the other way, against 2.7), at about 3 s more.
 const ENVELOPE_VOXELS: f64 = 0.25;
 
 /// What `mesh` measured.

@@ -449,6 +449,15 @@ fn cleanup_floor() -> f64 {
     (MIN_ANGLE + CLEANUP_MARGIN).to_radians().cos()
 }
 
+/// Each edge of a closed manifold `mesh` once, as (smaller end, larger
+/// end): of its two half-edges, the one running up.
+fn edges(mesh: &TriMesh) -> impl Iterator<Item = (u32, u32)> + '_ {
+    mesh.triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .filter(|(a, b)| a < b)
+}
+
 /// Collapses until `faces` or until none is allowed.
 fn collapse_to(
     mesh: &TriMesh,
@@ -460,16 +469,13 @@ fn collapse_to(
     let mut envelope = tolerance.map(|t| Envelope::new(mesh, t));
     let (mut around, mut after) = (Vec::new(), Vec::new());
     // Heapified at once, in linear time.
-    let mut heap: QuaternaryHeap<Entry> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .filter(|(a, b)| a < b)
+    let mut heap: QuaternaryHeap<Entry> = edges(mesh)
         .map(|(a, b)| Entry::from(s.candidate(a, b)))
         .collect::<Vec<_>>()
         .into();
     let mut scratch = [Vec::new(), Vec::new()];
     let turn = MAX_TURN.to_radians().cos();
+    let floor = MIN_ANGLE.to_radians().cos();
     let mut live = mesh.num_faces();
     // A tetrahedron is the smallest closed surface: the link condition
     // would let it fold into a doubled triangle.
@@ -488,7 +494,6 @@ fn collapse_to(
         let to = current.to;
         // The worst angle among the faces moved may fall only to
         // MIN_ANGLE (or to what it was).
-        let floor = MIN_ANGLE.to_radians().cos();
         if !matches!(s.shapes(a, b, to, turn, &mut scratch), Some((old, new)) if new <= old.max(floor))
         {
             continue;
@@ -530,33 +535,29 @@ fn collapse_to(
 /// faces the spread of the mean curvature falls from 1.48 to 0.67). The
 /// number made.
 fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
-    let mut edges: Vec<(f64, u32, u32)> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .filter(|(a, b)| a < b)
+    let mut lengths: Vec<(f64, u32, u32)> = edges(mesh)
         .map(|(a, b)| {
             let length = mesh.positions[a as usize].distance(mesh.positions[b as usize]);
             (length, a, b)
         })
         .collect();
-    if edges.is_empty() {
+    if lengths.is_empty() {
         return 0;
     }
-    let middle = edges.len() / 2;
-    let median = edges
+    let middle = lengths.len() / 2;
+    let median = lengths
         .select_nth_unstable_by(middle, |x, y| x.0.total_cmp(&y.0))
         .1
         .0;
     let limit = SHORT_EDGE * median;
-    edges.retain(|e| e.0 < limit);
-    edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    lengths.retain(|e| e.0 < limit);
+    lengths.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     let floor = SHORT_EDGE_ANGLE.to_radians().cos();
     let mut s = State::new(mesh);
     let mut scratch = [Vec::new(), Vec::new()];
     let mut vertices = mesh.num_vertices();
     let mut made = 0;
-    for (_, a, b) in edges {
+    for (_, a, b) in lengths {
         if s.removed[a as usize] || s.removed[b as usize] || vertices <= 4 {
             continue;
         }

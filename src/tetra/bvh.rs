@@ -12,7 +12,7 @@
 
 use glam::{DMat3, DVec3};
 
-pub(crate) use crate::mesh::closest::closest_point;
+use crate::mesh::closest::closest_point;
 
 /// Triangles per leaf.
 const LEAF: usize = 4;

@@ -32,11 +32,6 @@ pub use mesh::{Attribute, Hausdorff, Quality, TetMesh};
 pub use stuffing::{MAX_DIHEDRAL, MIN_DIHEDRAL};
 pub use winding::Winding;
 
-/// The point of a triangle closest to `p` (for callers outside the mesher).
-pub fn closest_point_on_triangle(p: glam::DVec3, t: &[glam::DVec3; 3]) -> glam::DVec3 {
-    bvh::closest_point(p, t)
-}
-
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::progress::Progress;

@@ -210,7 +210,7 @@ fn closest_in_tet(c: &[DVec3; 4], p: DVec3) -> DVec3 {
     }
     crate::tetra::mesh::TET_FACES
         .iter()
-        .map(|f| crate::tetra::closest_point_on_triangle(p, &[c[f[0]], c[f[1]], c[f[2]]]))
+        .map(|f| crate::mesh::closest::closest_point(p, &[c[f[0]], c[f[1]], c[f[2]]]))
         .min_by(|a, b| a.distance_squared(p).total_cmp(&b.distance_squared(p)))
         .unwrap_or(p)
 }

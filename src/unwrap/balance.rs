@@ -24,6 +24,7 @@
 use std::cmp::Ordering;
 
 use glam::{DMat2, DVec2, DVec3};
+use rayon::prelude::*;
 
 use super::conformal::Dirichlet;
 use super::metrics::{double_area, face_double_area};
@@ -72,7 +73,7 @@ pub fn balance(
     // Triangles flipped, degenerate or not a number.
     let bad = |uv: &[DVec2]| {
         faces
-            .iter()
+            .par_iter()
             .filter(|t| face_double_area(t, uv).partial_cmp(&0.0) != Some(Ordering::Greater))
             .count()
     };
@@ -81,19 +82,26 @@ pub fn balance(
     let mut allowed = bad(&current);
     let mut rounds = 0;
     while rounds < max_rounds {
-        // Local: the scaled rotation each triangle should be.
-        let targets: Vec<DMat2> = faces
-            .iter()
-            .zip(&local)
-            .map(|(t, p)| target(jacobian(p, t.map(|v| current[v as usize])), lambda))
+        // Local: the scaled rotation each triangle should be, and what it
+        // asks of each of its edges (faces in parallel, summed in order
+        // below, so the sums do not depend on the thread count).
+        let pulls: Vec<[DVec2; 3]> = (faces, &local[..])
+            .into_par_iter()
+            .enumerate()
+            .map(|(f, (t, p))| {
+                let l = target(jacobian(p, t.map(|v| current[v as usize])), lambda);
+                std::array::from_fn(|c| {
+                    let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                    l * (p[a] - p[b]) * laplacian.weight(f, c)
+                })
+            })
             .collect();
         // Global: sum over edges (i, j) of w_ij (u_i - u_j - L_t (x_i - x_j))
         // = 0 at every free vertex.
         let mut source = [vec![0.0; n], vec![0.0; n]];
-        for (f, (t, (p, l))) in faces.iter().zip(local.iter().zip(&targets)).enumerate() {
-            for c in 0..3 {
+        for (t, pull) in faces.iter().zip(&pulls) {
+            for (c, d) in pull.iter().enumerate() {
                 let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-                let d = *l * (p[a] - p[b]) * laplacian.weight(f, c);
                 for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
                     source[0][v as usize] += sign * d.x;
                     source[1][v as usize] += sign * d.y;
@@ -104,8 +112,11 @@ pub fn balance(
             current.iter().map(|u| u.x).collect(),
             current.iter().map(|u| u.y).collect(),
         ];
-        let x = laplacian.solve(&given[0], &source[0]);
-        let y = laplacian.solve(&given[1], &source[1]);
+        // The two coordinates' solves are independent: one per core.
+        let (x, y) = rayon::join(
+            || laplacian.solve(&given[0], &source[0]),
+            || laplacian.solve(&given[1], &source[1]),
+        );
         let mut next: Vec<DVec2> = x
             .into_iter()
             .zip(y)

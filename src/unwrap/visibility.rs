@@ -79,6 +79,8 @@ pub(crate) trait Camera: Sync {
     fn project(&self, p: DVec3) -> Option<(DVec2, f64)>;
     /// Whether depths interpolate as 1/z (perspective) or linearly.
     fn perspective(&self) -> bool;
+    /// The direction the camera looks along (through the image's centre).
+    fn forward(&self) -> DVec3;
     /// World size of a pixel at `depth`.
     fn pixel_size(&self, depth: f64) -> f64;
 
@@ -128,6 +130,9 @@ impl Camera for Orthographic {
     fn perspective(&self) -> bool {
         false
     }
+    fn forward(&self) -> DVec3 {
+        self.forward
+    }
     fn pixel_size(&self, _depth: f64) -> f64 {
         2.0 * self.radius / self.res as f64
     }
@@ -169,6 +174,9 @@ impl Camera for CubeFace {
     fn perspective(&self) -> bool {
         true
     }
+    fn forward(&self) -> DVec3 {
+        self.forward
+    }
     fn pixel_size(&self, depth: f64) -> f64 {
         2.0 * depth / self.res as f64
     }
@@ -189,19 +197,47 @@ pub(crate) struct DepthBuffer {
 impl DepthBuffer {
     pub(crate) fn render(camera: &dyn Camera, mesh: &TriMesh) -> DepthBuffer {
         let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
-        Self::render_projected(camera, mesh, &projected)
+        Self::render_projected(camera, mesh, &projected, |_| true)
     }
 
     /// Render with every vertex already projected (`None` when behind a
-    /// perspective camera's near plane).
+    /// perspective camera's near plane), only the faces `drawn` keeps.
     pub(crate) fn render_projected(
         camera: &dyn Camera,
         mesh: &TriMesh,
         projected: &[Option<(DVec2, f64)>],
+        drawn: impl Fn(usize) -> bool,
     ) -> DepthBuffer {
+        let mut buffer = DepthBuffer::empty();
+        buffer.draw(camera, mesh, projected, drawn);
+        buffer
+    }
+
+    /// A buffer of no pixels, for `draw` to size.
+    pub(crate) fn empty() -> DepthBuffer {
+        DepthBuffer {
+            res: 0,
+            depth: Vec::new(),
+            face: Vec::new(),
+        }
+    }
+
+    /// `render_projected` into this buffer's memory: a view after view
+    /// reuses it rather than fault in new pages for every one.
+    pub(crate) fn draw(
+        &mut self,
+        camera: &dyn Camera,
+        mesh: &TriMesh,
+        projected: &[Option<(DVec2, f64)>],
+        drawn: impl Fn(usize) -> bool,
+    ) {
         let res = camera.resolution();
-        let mut depth = vec![f32::INFINITY; res * res];
-        let mut face = vec![u32::MAX; res * res];
+        self.res = res;
+        self.depth.clear();
+        self.depth.resize(res * res, f32::INFINITY);
+        self.face.clear();
+        self.face.resize(res * res, u32::MAX);
+        let (depth, face) = (&mut self.depth, &mut self.face);
         let perspective = camera.perspective();
         let mut draw = |f: usize, [a, b, c]: [(DVec2, f64); 3]| {
             let z = [a.1, b.1, c.1];
@@ -219,6 +255,9 @@ impl DepthBuffer {
             });
         };
         for (f, t) in mesh.triangles.iter().enumerate() {
+            if !drawn(f) {
+                continue;
+            }
             if let [Some(a), Some(b), Some(c)] = t.map(|v| projected[v as usize]) {
                 draw(f, [a, b, c]);
             } else {
@@ -229,7 +268,6 @@ impl DepthBuffer {
                 }
             }
         }
-        DepthBuffer { res, depth, face }
     }
 
     /// Whether a point on the surface, seen at pixel position and depth
@@ -346,28 +384,41 @@ pub fn compute(
     };
     progress.stage("visibility", viewpoint_cameras.len() as u64);
 
-    let vertex_faces = |v: usize| {
-        topo.outgoing(crate::mesh::VertexId::from(v))
-            .map(|h| topo.face(h).0)
-    };
-    let edge_faces = |e: usize| {
-        let h = topo.edge_halfedge(EdgeId::from(e));
-        [Some(topo.face(h).0), topo.twin(h).map(|t| topo.face(t).0)]
-    };
+    // Each vertex's faces and each edge's two (a boundary edge's one
+    // twice), listed once: every view asks for them of whatever it hides.
+    let mut fan_start = Vec::with_capacity(mesh.num_vertices() + 1);
+    let mut fan_faces = Vec::with_capacity(3 * mesh.num_faces());
+    fan_start.push(0);
+    for v in 0..mesh.num_vertices() {
+        fan_faces.extend(topo.outgoing(VertexId::from(v)).map(|h| topo.face(h).0));
+        fan_start.push(fan_faces.len());
+    }
+    let vertex_faces = |v: usize| &fan_faces[fan_start[v]..fan_start[v + 1]];
+    let edge_sides: Vec<[u32; 2]> = (0..topo.num_edges())
+        .map(|e| {
+            let h = topo.edge_halfedge(EdgeId::from(e));
+            let f = topo.face(h).0;
+            [f, topo.twin(h).map_or(f, |t| topo.face(t).0)]
+        })
+        .collect();
+    let outward = outward_normals(mesh, topo);
     let nv = mesh.num_vertices();
     let ne = topo.num_edges();
     // One viewpoint: which vertices and edges any of its cameras sees.
-    let render_viewpoint = |cams: &Vec<Box<dyn Camera>>| {
+    let render_viewpoint = |cams: &Vec<Box<dyn Camera>>, buffer: &mut DepthBuffer| {
         let mut vertex_seen = vec![false; nv];
         let mut edge_seen = vec![false; ne];
         for camera in cams {
             let camera = camera.as_ref();
             let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
-            let buffer = DepthBuffer::render_projected(camera, mesh, &projected);
+            // Back faces of closed pieces are never nearest from outside
+            // (`outward_normals`); a perspective camera may be inside one.
+            buffer.draw(camera, mesh, &projected, |f| {
+                camera.perspective() || outward[f].dot(camera.forward()) <= 0.0
+            });
             for (v, seen) in vertex_seen.iter_mut().enumerate() {
                 if !*seen && let Some(at) = projected[v] {
-                    *seen =
-                        buffer.sees(camera, at, |f| vertex_faces(v).any(|g| g == f)) == Some(true);
+                    *seen = buffer.sees(camera, at, |f| vertex_faces(v).contains(&f)) == Some(true);
                 }
             }
             for (e, seen) in edge_seen.iter_mut().enumerate() {
@@ -385,8 +436,7 @@ pub fn compute(
                         .map(|(p, q)| ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0))
                 };
                 if let Some(at) = at {
-                    *seen =
-                        buffer.sees(camera, at, |f| edge_faces(e).contains(&Some(f))) == Some(true);
+                    *seen = buffer.sees(camera, at, |f| edge_sides[e].contains(&f)) == Some(true);
                 }
             }
         }
@@ -395,15 +445,16 @@ pub fn compute(
     };
     let (vertex_hits, edge_hits) = viewpoint_cameras
         .par_iter()
-        .map(render_viewpoint)
         .fold(
-            || (vec![0u32; nv], vec![0u32; ne]),
-            |(mut vc, mut ec), (v, e)| {
+            || (vec![0u32; nv], vec![0u32; ne], DepthBuffer::empty()),
+            |(mut vc, mut ec, mut buffer), cams| {
+                let (v, e) = render_viewpoint(cams, &mut buffer);
                 add_hits(&mut vc, &v);
                 add_hits(&mut ec, &e);
-                (vc, ec)
+                (vc, ec, buffer)
             },
         )
+        .map(|(vc, ec, _)| (vc, ec))
         .reduce(
             || (vec![0u32; nv], vec![0u32; ne]),
             |(mut va, mut ea), (vb, eb)| {
@@ -419,6 +470,43 @@ pub fn compute(
         edge: edge_hits.iter().map(fraction).collect(),
         views,
     }
+}
+
+/// Every face's normal (unnormalised), turned to point out of the volume
+/// its piece encloses, where the piece is closed; zero in open pieces.
+///
+/// Along a ray from outside, the first hit on a closed surface enters the
+/// volume it bounds, through a face turned towards the ray; so an
+/// orthographic view of closed pieces need not draw the faces turned away
+/// (half of them), and the depth buffer's nearest depths stay the same. A
+/// piece's signed volume says which way its faces turn, so an inside-out
+/// piece, or a void's shell, is culled the right way. Open pieces are
+/// drawn whole: their back faces can be seen through a hole.
+fn outward_normals(mesh: &TriMesh, topo: &Topology) -> Vec<DVec3> {
+    let components = crate::mesh::Components::find(topo);
+    let mut closed = vec![true; components.count];
+    let mut volume = vec![0.0; components.count];
+    for (f, &c) in components.of_face.iter().enumerate() {
+        let [a, b, p] = mesh.corners(f);
+        volume[c as usize] += a.dot(b.cross(p));
+    }
+    for h in topo.boundary_loops().iter().flatten() {
+        closed[components.of_face[topo.face(*h).idx()] as usize] = false;
+    }
+    components
+        .of_face
+        .iter()
+        .enumerate()
+        .map(|(f, &c)| {
+            let c = c as usize;
+            if closed[c] && volume[c] != 0.0 {
+                let [a, b, p] = mesh.corners(f);
+                (b - a).cross(p - a) * volume[c].signum()
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect()
 }
 
 fn add_hits(counts: &mut [u32], hits: &[bool]) {
@@ -475,6 +563,69 @@ mod tests {
         for &v in &vis.vertex {
             assert!((0.42..=0.58).contains(&v), "visibility {v}");
         }
+    }
+
+    /// A unit sphere, and one of `scale` inside it, turned inside out
+    /// (a void's shell) when `void`.
+    fn nested_spheres(scale: f64, void: bool) -> TriMesh {
+        let outer = icosphere(3);
+        let n = outer.num_vertices() as u32;
+        let mut positions = outer.positions.clone();
+        positions.extend(outer.positions.iter().map(|p| *p * scale));
+        let mut triangles = outer.triangles.clone();
+        triangles.extend(outer.triangles.iter().map(|t| {
+            let t = t.map(|v| v + n);
+            if void { [t[0], t[2], t[1]] } else { t }
+        }));
+        TriMesh::new(positions, triangles)
+    }
+
+    #[test]
+    fn culled_back_faces_hide_nothing_and_expose_nothing() {
+        // Closed pieces are drawn without their back faces: a shell inside
+        // another stays unseen, whichever way it is turned, and the outer
+        // one is seen as it is alone.
+        let alone = icosphere(3);
+        let alone_vis = compute(
+            &alone,
+            &Topology::build(&alone).unwrap(),
+            &Viewpoints::Orbit { views: 64 },
+            &Silent,
+        );
+        for void in [false, true] {
+            let mesh = nested_spheres(0.5, void);
+            let topo = Topology::build(&mesh).unwrap();
+            let vis = compute(&mesh, &topo, &Viewpoints::Orbit { views: 64 }, &Silent);
+            let n = alone.num_vertices();
+            assert!(vis.vertex[n..].iter().all(|&v| v == 0.0), "void {void}");
+            // The outer sphere's own resolution differs (the mean edge is
+            // the pair's), so its figures are compared in the mean.
+            let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+            assert!(
+                (mean(&vis.vertex[..n]) - mean(&alone_vis.vertex)).abs() < 0.02,
+                "void {void}: {} against {}",
+                mean(&vis.vertex[..n]),
+                mean(&alone_vis.vertex)
+            );
+        }
+        // Turned inside out, a closed sphere is seen as before.
+        let mut inside_out = alone.clone();
+        for t in &mut inside_out.triangles {
+            t.swap(1, 2);
+        }
+        let vis = compute(
+            &inside_out,
+            &Topology::build(&inside_out).unwrap(),
+            &Viewpoints::Orbit { views: 64 },
+            &Silent,
+        );
+        let same = vis
+            .vertex
+            .iter()
+            .zip(&alone_vis.vertex)
+            .filter(|(a, b)| a == b)
+            .count();
+        assert!(same * 100 >= 99 * alone.num_vertices(), "{same} the same");
     }
 
     #[test]

@@ -45,11 +45,15 @@ pub struct Cholesky {
 impl SpdPattern {
     /// The pattern of the given positions, duplicates merged. The columns
     /// are gathered by a counting sort and each column's rows deduplicated
-    /// with a marker per row, in time linear in the positions: faer's own
-    /// constructor sorts them all, which on an unwrap's layout (2.4M
-    /// positions) cost as much as the factorisation.
+    /// with a marker per row, so only each column's few distinct rows are
+    /// sorted: faer's own constructor sorts all the positions, which on an
+    /// unwrap's layout (2.4M of them) cost as much as the factorisation.
     pub fn new(n: usize, positions: &[(u32, u32)]) -> Result<SpdPattern> {
-        debug_assert!(positions.iter().all(|&(r, c)| r >= c && (r as usize) < n));
+        if let Some(&(r, c)) = positions.iter().find(|&&(r, c)| r < c || r as usize >= n) {
+            return Err(Error::invalid(format!(
+                "sparse pattern: ({r}, {c}) is not in the lower triangle of a {n} x {n} matrix"
+            )));
+        }
         if positions.len() > u32::MAX as usize {
             return Err(Error::invalid("sparse pattern: too many entries"));
         }

@@ -7,8 +7,9 @@
 //!   endoscope inside a cavity), each looking all around (a cube map of six
 //!   90-degree views).
 //!
-//! A point counts as seen in a view when its depth is within a small
-//! tolerance (three pixels' worth) of the depth buffer at its pixel. Views
+//! A point counts as seen in a view when its depth is within half a
+//! pixel's worth of the depth buffer at its pixel, or the face drawn there
+//! is one of its own (`DepthBuffer::sees`). Views
 //! render in parallel; counts are integers, so the result does not depend
 //! on the thread count.
 
@@ -475,19 +476,26 @@ pub fn compute(
 /// Every face's normal (unnormalised), turned to point out of the volume
 /// its piece encloses, where the piece is closed; zero in open pieces.
 ///
-/// Along a ray from outside, the first hit on a closed surface enters the
-/// volume it bounds, through a face turned towards the ray; so an
-/// orthographic view of closed pieces need not draw the faces turned away
-/// (half of them), and the depth buffer's nearest depths stay the same. A
-/// piece's signed volume says which way its faces turn, so an inside-out
-/// piece, or a void's shell, is culled the right way. Open pieces are
-/// drawn whole: their back faces can be seen through a hole.
+/// Along a ray from outside, the first hit on a closed surface that does
+/// not cross itself enters the volume it bounds, through a face turned
+/// towards the ray; so an orthographic view of closed pieces need not draw
+/// the faces turned away (half of them), and the depth buffer's nearest
+/// depths stay the same (where two faces tie at a pixel, which one is
+/// drawn may change). A piece's signed volume says which way its faces
+/// turn, so an inside-out piece, or a void's shell, is culled the right
+/// way. Open pieces are drawn whole: their back faces can be seen through
+/// a hole. A closed piece that crosses itself (a fold through its own
+/// surface) can lose the few pixels where a back face is nearest.
 fn outward_normals(mesh: &TriMesh, topo: &Topology) -> Vec<DVec3> {
     let components = crate::mesh::Components::find(topo);
     let mut closed = vec![true; components.count];
     let mut volume = vec![0.0; components.count];
+    // Signed volumes about a vertex of each piece, so that a piece far from
+    // the origin does not lose its sum to cancellation.
+    let mut anchor: Vec<Option<DVec3>> = vec![None; components.count];
     for (f, &c) in components.of_face.iter().enumerate() {
-        let [a, b, p] = mesh.corners(f);
+        let o = *anchor[c as usize].get_or_insert(mesh.positions[mesh.triangles[f][0] as usize]);
+        let [a, b, p] = mesh.corners(f).map(|x| x - o);
         volume[c as usize] += a.dot(b.cross(p));
     }
     for h in topo.boundary_loops().iter().flatten() {

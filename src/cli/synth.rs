@@ -31,8 +31,8 @@ pub struct Args {
     /// Iterations per pixel and pyramid level (M).
     #[arg(long, default_value_t = 3)]
     iterations: usize,
-    /// Pyramid levels (default: down to an exemplar of about 16 pixels a
-    /// side, an output of 32).
+    /// Pyramid levels (default: down to an exemplar of about 11 pixels a
+    /// side, an output of 8).
     #[arg(long, value_parser = levels_in_range)]
     levels: Option<usize>,
     /// Side of the square neighbourhood compared (odd).
@@ -40,7 +40,9 @@ pub struct Args {
     neighbourhood: usize,
     /// Weight of the occurrence penalty, which spreads copies over the whole
     /// exemplar: a candidate's cost is multiplied by 1 + this x how far its
-    /// source is over-used (0: the paper's cost alone).
+    /// source is over-used (0: the paper's cost alone). Outputs under 512
+    /// pixels a side with fewer pixels than 4x the exemplar's weigh it up to
+    /// 4x more.
     #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Output PNG.

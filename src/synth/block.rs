@@ -74,7 +74,8 @@ pub struct BlockOptions {
     /// Side of each square plane neighbourhood (odd).
     pub neighbourhood: usize,
     /// Weight of FNPTS's occurrence penalty, which multiplies a candidate's
-    /// cost as in 2D (0: the paper's cost alone).
+    /// cost as in 2D (0: the paper's cost alone), without 2D's growth for
+    /// small outputs (blocks were not measured against it).
     pub occurrence: f64,
     pub method: Method,
 }

@@ -31,25 +31,33 @@ fn a_layered_block_follows_its_layers_and_the_sweep_fix_removes_the_sweep() {
     let block = synthesize_layered(&e, &opts, &Silent).expect("layered block");
     assert_eq!(block.size, [64; 3]);
     let q = measure_layered(&block, &e, 4);
-    let flat = synthesize(
-        &e,
-        &SynthOptions {
-            width: 64,
-            height: 64,
-            tileable: true,
-            ..Default::default()
-        },
-        &Silent,
-    )
-    .expect("2D synthesis");
-    let q2 = measure(
-        &e,
-        &Rgb {
-            width: 64,
-            height: 64,
-            pixels: &flat.pixels,
-        },
-    );
+    // 2D synthesis of a 64-pixel tile from the same exemplar, with two
+    // pyramid levels (the 2D default's depth there when the 1.5x bounds
+    // below were set), and with today's deeper default.
+    let flat = |levels| {
+        let texture = synthesize(
+            &e,
+            &SynthOptions {
+                width: 64,
+                height: 64,
+                tileable: true,
+                levels,
+                ..Default::default()
+            },
+            &Silent,
+        )
+        .expect("2D synthesis");
+        measure(
+            &e,
+            &Rgb {
+                width: 64,
+                height: 64,
+                pixels: &texture.pixels,
+            },
+        )
+    };
+    let q2 = flat(Some(2));
+    let deeper = flat(None);
     let swept = synthesize_layered(
         &e,
         &LayeredOptions {
@@ -61,14 +69,28 @@ fn a_layered_block_follows_its_layers_and_the_sweep_fix_removes_the_sweep() {
     .expect("without the fix");
     let sweep_off = sweep_score(&swept, 4);
     eprintln!(
-        "layered 64: rows RMS {:.2}, coherence {:.2} / completeness {:.2} (2D: {:.2} / {:.2}), sweep {:.3} (fix off: {sweep_off:.3})",
-        q.rows_rms, q.coherence, q.completeness, q2.coherence, q2.completeness, q.sweep
+        "layered 64: rows RMS {:.2}, coherence {:.2} / completeness {:.2} (2D: {:.2} / {:.2}, default {:.2} / {:.2}), sweep {:.3} (fix off: {sweep_off:.3})",
+        q.rows_rms,
+        q.coherence,
+        q.completeness,
+        q2.coherence,
+        q2.completeness,
+        deeper.coherence,
+        deeper.completeness,
+        q.sweep
     );
     assert!(q.rows_rms <= 8.0, "rows RMS {:.2}", q.rows_rms);
     assert!(q.coherence <= 1.5 * q2.coherence, "{q:?} vs 2D {q2:?}");
     assert!(
         q.completeness <= 1.5 * q2.completeness,
         "{q:?} vs 2D {q2:?}"
+    );
+    // Against today's default the block is about 1.8x in coherence and
+    // 1.5x in completeness (2026-11-28): held there so the gap cannot grow
+    // unseen.
+    assert!(
+        q.coherence <= 2.0 * deeper.coherence && q.completeness <= 1.7 * deeper.completeness,
+        "{q:?} vs the default 2D {deeper:?}"
     );
     assert!(
         sweep_off > q.sweep + 0.1,

@@ -31,8 +31,8 @@ pub struct Args {
     /// Iterations per pixel and pyramid level (M).
     #[arg(long, default_value_t = 3)]
     iterations: usize,
-    /// Pyramid levels (default: down to an exemplar of about 11 pixels a
-    /// side, an output of 8).
+    /// Pyramid levels (default: down to an exemplar of about 16 pixels a
+    /// side and an output of 32; 11 and 8 for outputs under 512 pixels).
     #[arg(long, value_parser = levels_in_range)]
     levels: Option<usize>,
     /// Side of the square neighbourhood compared (odd).

@@ -52,15 +52,21 @@
 //! its uneven lighting).
 //!
 //! Pyramid depth (beyond the paper): by default the levels go down until
-//! the coarsest exemplar is about 11 pixels a side, where one 7 x 7
-//! neighbourhood sees most of it, so the layout (shading, where the sparse
-//! features lie) is decided coherently there; the output stops at 8
-//! pixels a side, so the exemplar, not the output's size, usually sets the
-//! depth. Stopping the output at 32 pixels, as before, left 128-pixel
-//! outputs three levels and the coarsest exemplar 40 to 140 pixels wide,
-//! too wide for a neighbourhood to place its features: organtex lost to
-//! Embark (coherence or completeness) on 10 of 14 tissues at 128 and 3 at
-//! 256 (colonic crypts' coherence at 128: 9.0 against 4.4).
+//! the coarsest exemplar is about 16 pixels a side, where one 7 x 7
+//! neighbourhood sees a good part of it, so the layout (shading, where the
+//! sparse features lie) is decided coherently there, and the output stops
+//! at 32 pixels. Outputs under 512 pixels a side (`SMALL_OUTPUT`) go
+//! deeper, to an 11-pixel exemplar and an 8-pixel output, so the exemplar,
+//! not the output's size, sets their depth: stopping at 32 output pixels
+//! left a 128-pixel tile three levels and its coarsest exemplar 40 to 140
+//! pixels wide, too wide for a neighbourhood to place its features, and
+//! organtex lost to Embark (coherence or completeness) on 10 of 14
+//! tissues at 128 and 3 at 256 (colonic crypts' coherence at 128: 9.0
+//! against 4.4). Outputs of 512 and more keep the depth the database's
+//! textures are built with (and the scenes' seams and blends were measured
+//! with): deeper, they beat Embark as well (14 of 14 at 512), but the
+//! MNI brain's serosa, a smoother texture, lost the seam its blending
+//! hid (contrast 1.00 unblended, 1.04 blended; 1.07 and 1.02 before).
 
 use rayon::prelude::*;
 
@@ -79,7 +85,8 @@ pub struct SynthOptions {
     /// M: iterations per pixel and level.
     pub iterations: usize,
     /// Pyramid levels; `None` picks as many as keep the coarsest exemplar at
-    /// least 11 pixels wide and the output 8.
+    /// least 16 pixels wide and the output 32 (11 and 8 for outputs under
+    /// 512 pixels a side).
     pub levels: Option<usize>,
     /// K: side of the square neighbourhood (odd).
     pub neighbourhood: usize,
@@ -217,12 +224,16 @@ const SPREAD_BOOST: f64 = 4.0;
 pub const MAX_LEVELS: usize = 16;
 
 /// Smallest side of the coarsest exemplar and output that the default
-/// pyramid goes down to (module doc: "Pyramid depth"). 32 for both left
-/// the database's 90 to 340 pixel crops two or three levels, and the fine
-/// levels had to place features they could not see whole; an exemplar of
+/// pyramid goes down to (module doc: "Pyramid depth"), and below
+/// `SMALL_OUTPUT` pixels a side. 32 for both left the database's 90 to 340
+/// pixel crops two or three levels, and the fine levels had to place
+/// features they could not see whole; for a small output, an exemplar of
 /// 16 still left the colonic mucosa (220 x 190) one level short at 128.
-const COARSEST_EXEMPLAR: usize = 11;
-const COARSEST_OUTPUT: usize = 8;
+const COARSEST_EXEMPLAR: usize = 16;
+const COARSEST_OUTPUT: usize = 32;
+const SMALL_OUTPUT: usize = 512;
+const SMALL_COARSEST_EXEMPLAR: usize = 11;
+const SMALL_COARSEST_OUTPUT: usize = 8;
 
 /// Exemplar pyramid, finest first: as many levels as asked, or (by
 /// default) while the next exemplar keeps `COARSEST_EXEMPLAR` pixels a side
@@ -251,8 +262,14 @@ fn pyramid(ex: &Exemplar, opts: &SynthOptions) -> Result<Vec<Exemplar>> {
             }
         }
         None => {
-            while opts.width.min(opts.height) >> pyramid.len() >= COARSEST_OUTPUT {
-                match pyramid.last().and_then(|e| e.downsample(COARSEST_EXEMPLAR)) {
+            let side = opts.width.min(opts.height);
+            let (exemplar, output) = if side < SMALL_OUTPUT {
+                (SMALL_COARSEST_EXEMPLAR, SMALL_COARSEST_OUTPUT)
+            } else {
+                (COARSEST_EXEMPLAR, COARSEST_OUTPUT)
+            };
+            while side >> pyramid.len() >= output {
+                match pyramid.last().and_then(|e| e.downsample(exemplar)) {
                     Some(coarser) => pyramid.push(coarser),
                     None => break,
                 }
@@ -667,13 +684,17 @@ mod depth_tests {
 
     #[test]
     fn the_exemplar_sets_the_default_depth_down_to_an_eight_pixel_output() {
-        // A 340-pixel exemplar halves to 11 pixels in five levels, whether
-        // the output is 512 or 128 pixels; a 64-pixel output stops at 8.
+        // A 340-pixel exemplar halves to 21 pixels in five levels, whether
+        // the output is 512 or 128 pixels (down to 32 and 8 output pixels);
+        // a 64-pixel output stops at 8. A 90-pixel exemplar goes to 11
+        // pixels for a small output, to 22 for a 512-pixel one.
         let ex = exemplar(340);
         assert_eq!(pyramid(&ex, &options(512)).unwrap().len(), 5);
         assert_eq!(pyramid(&ex, &options(128)).unwrap().len(), 5);
         assert_eq!(pyramid(&ex, &options(64)).unwrap().len(), 4);
         assert_eq!(pyramid(&exemplar(64), &options(64)).unwrap().len(), 3);
+        assert_eq!(pyramid(&exemplar(90), &options(256)).unwrap().len(), 4);
+        assert_eq!(pyramid(&exemplar(90), &options(512)).unwrap().len(), 3);
     }
 
     #[test]

@@ -4,14 +4,13 @@
 //! on any thread count, and bad input is refused clearly.
 
 mod common;
-use common::source;
+use common::{flat_quality, source};
 use std::process::Command;
 
 use organtex::progress::Silent;
 use organtex::synth::block::{BlockOptions, Method, synthesize_block};
 use organtex::synth::exemplar::{Crop, Exemplar};
-use organtex::synth::fnpts::{SynthOptions, synthesize};
-use organtex::synth::quality::{Rgb, measure, measure_block};
+use organtex::synth::quality::measure_block;
 use organtex::synth::volume::Volume;
 
 fn crop(name: &str, x: u32, y: u32, side: u32) -> Exemplar {
@@ -42,30 +41,8 @@ fn block(size: usize, method: Method) -> BlockOptions {
 fn slices_score_within_one_and_a_half_times_2d_synthesis_and_the_block_tiles() {
     for name in ["gravel.png", "ihc.png"] {
         let ex = crop(name, 0, 0, 64);
-        let flat = |levels| {
-            let texture = synthesize(
-                &ex,
-                &SynthOptions {
-                    width: 64,
-                    height: 64,
-                    tileable: true,
-                    levels,
-                    ..SynthOptions::default()
-                },
-                &Silent,
-            )
-            .unwrap();
-            measure(
-                &ex,
-                &Rgb {
-                    width: 64,
-                    height: 64,
-                    pixels: &texture.pixels,
-                },
-            )
-        };
-        let reference = flat(Some(2));
-        let deeper = flat(None);
+        let reference = flat_quality(&ex, 64, Some(2));
+        let deeper = flat_quality(&ex, 64, None);
         let volume = synthesize_block(
             std::slice::from_ref(&ex),
             &block(64, Method::Fnpts),

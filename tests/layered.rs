@@ -6,13 +6,13 @@
 //! removes the diagonal sweep, the depth axis travels in the NRRD header to
 //! the LST reader, and bad input is refused clearly.
 
+mod common;
+use common::flat_quality;
 use organtex::progress::Silent;
 use organtex::synth::block::layered::{
     LayeredOptions, measure_layered, sweep_score, synthesize_layered,
 };
 use organtex::synth::exemplar::Exemplar;
-use organtex::synth::fnpts::{SynthOptions, synthesize};
-use organtex::synth::quality::{Rgb, measure};
 use organtex::synth::volume::Volume;
 
 fn wall(rows: usize) -> Exemplar {
@@ -34,30 +34,8 @@ fn a_layered_block_follows_its_layers_and_the_sweep_fix_removes_the_sweep() {
     // 2D synthesis of a 64-pixel tile from the same exemplar, with two
     // pyramid levels (the 2D default's depth there when the 1.5x bounds
     // below were set), and with today's deeper default.
-    let flat = |levels| {
-        let texture = synthesize(
-            &e,
-            &SynthOptions {
-                width: 64,
-                height: 64,
-                tileable: true,
-                levels,
-                ..Default::default()
-            },
-            &Silent,
-        )
-        .expect("2D synthesis");
-        measure(
-            &e,
-            &Rgb {
-                width: 64,
-                height: 64,
-                pixels: &texture.pixels,
-            },
-        )
-    };
-    let q2 = flat(Some(2));
-    let deeper = flat(None);
+    let q2 = flat_quality(&e, 64, Some(2));
+    let deeper = flat_quality(&e, 64, None);
     let swept = synthesize_layered(
         &e,
         &LayeredOptions {

@@ -47,3 +47,35 @@ pub fn source(name: &str) -> std::path::PathBuf {
         root.join("database/sources").join(name)
     }
 }
+
+/// The quality of a tileable `side`-pixel 2D synthesis from `ex` with
+/// `levels` pyramid levels (`None`: the default): the reference 3D
+/// synthesis is held to.
+pub fn flat_quality(
+    ex: &organtex::synth::exemplar::Exemplar,
+    side: usize,
+    levels: Option<usize>,
+) -> organtex::synth::quality::Quality {
+    use organtex::synth::fnpts::{SynthOptions, synthesize};
+    use organtex::synth::quality::{Rgb, measure};
+    let texture = synthesize(
+        ex,
+        &SynthOptions {
+            width: side,
+            height: side,
+            tileable: true,
+            levels,
+            ..SynthOptions::default()
+        },
+        &organtex::progress::Silent,
+    )
+    .expect("2D synthesis");
+    measure(
+        ex,
+        &Rgb {
+            width: side,
+            height: side,
+            pixels: &texture.pixels,
+        },
+    )
+}

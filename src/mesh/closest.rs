@@ -44,7 +44,7 @@ pub fn closest_point(p: DVec3, t: &[DVec3; 3]) -> DVec3 {
     }
     let denom = va + vb + vc;
     if denom.abs() <= f64::MIN_POSITIVE {
-        // Degenerate triangle: fall back to its closest corner or edge.
+        // Degenerate triangle: fall back to its closest corner.
         return [a, b, c]
             .into_iter()
             .min_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)))

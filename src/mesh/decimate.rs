@@ -368,19 +368,18 @@ impl State {
 
 /// Collapse edges of `mesh` (closed and manifold) until it has at most
 /// `faces` faces, each round's collapses keeping that round's surface's
-/// vertices within `envelope` of the result (`envelope::Envelope`; the
-/// last round without, so the budget is reached); then `relax` rounds of
-/// edge flips and tangential relaxation. Where the collapses get stuck above the budget (every
-/// candidate would make an angle under `MIN_ANGLE`), a round of flips and
-/// relaxation evens the faces out and the collapses go on, up to
-/// `ROUNDS` times. Then the edges much shorter than the rest are
+/// vertices within `envelope` of the result (`envelope::Envelope`; the last
+/// round without, so the budget is reached); then `relax` rounds of edge
+/// flips and tangential relaxation. Where the collapses get stuck above the
+/// budget (every candidate would make an angle under `MIN_ANGLE`), a round
+/// of flips and relaxation evens the faces out and the collapses go on, up
+/// to `ROUNDS` times. Then the edges much shorter than the rest are
 /// collapsed (`collapse_short_edges`). Last, the faces still under
-/// `MIN_ANGLE` (the budget
-/// stops the collapses before their guard has mended every face it was
-/// given) are mended where a corner's move, a collapse or a flip can (a
-/// best effort: the result's smallest angle is the caller's to report).
-/// Deterministic (one thread, ties broken by the edge).
-/// The error names why the budget was not reached.
+/// `MIN_ANGLE` (the budget stops the collapses before their guard has
+/// mended every face it was given) are mended where a corner's move, a
+/// collapse or a flip can (a best effort: the result's smallest angle is
+/// the caller's to report). Deterministic (one thread, ties broken by the
+/// edge). The error names why the budget was not reached.
 pub fn decimate(
     mesh: &TriMesh,
     faces: usize,
@@ -582,8 +581,9 @@ fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
 /// the budget is met (`collapse_short_edges`).
 const SHORT_EDGE: f64 = 0.35;
 /// The smallest angle (degrees) such a collapse may leave (or less where
-/// a face round the edge had less), for the cleanup to mend: with MIN_ANGLE itself as the bound half the short
-/// edges stay (the faces round a cluster of small ones are large).
+/// a face round the edge had less), for the cleanup to mend: with
+/// MIN_ANGLE itself as the bound half the short edges stay (the faces
+/// round a cluster of small ones are large).
 const SHORT_EDGE_ANGLE: f64 = 5.0;
 
 /// Collapses of an edge of each face whose smallest angle is under the

@@ -207,15 +207,14 @@ impl Synthesis {
     }
 }
 
-/// The output side and the output/exemplar pixel ratio under which the
-/// occurrence penalty grows, and its largest multiple
+/// The output/exemplar pixel ratio under which the occurrence penalty
+/// grows for a small output (`SMALL_OUTPUT`), and its largest multiple
 /// (`Level::occurrence_weight`). Measured on the tissue database
 /// (tools/compare_synth.py): at 128 and 256 pixels the plain weight lost
 /// completeness on 6 of 28 cases; grown at 512 too, it cost the fundus
 /// photograph its coherence there (0.68 against Embark's 0.55; 0.49 with
 /// the plain weight), so 512-pixel outputs keep the weight they were
 /// tuned with.
-const SPREAD_SIDE: f64 = 512.0;
 const SPREAD_SHARE: f64 = 4.0;
 const SPREAD_BOOST: f64 = 4.0;
 
@@ -437,13 +436,13 @@ impl<'a> Level<'a> {
     }
 
     /// The occurrence penalty's weight: `occurrence` for outputs of
-    /// `SPREAD_SIDE` pixels a side or more, or with at least `SPREAD_SHARE`
+    /// `SMALL_OUTPUT` pixels a side or more, or with at least `SPREAD_SHARE`
     /// times the exemplar's usable pixels; below both, rising linearly
     /// with each to `SPREAD_BOOST` times it for an output half that side
     /// or less with a vanishing share (module doc: "Occurrence").
     fn occurrence_weight(&self, opts: &SynthOptions) -> f64 {
-        let side = opts.width.min(opts.height) as f64;
-        let small_side = ((SPREAD_SIDE - side) / (SPREAD_SIDE / 2.0)).clamp(0.0, 1.0);
+        let (side, small) = (opts.width.min(opts.height) as f64, SMALL_OUTPUT as f64);
+        let small_side = ((small - side) / (small / 2.0)).clamp(0.0, 1.0);
         let small_share = (1.0 - self.share / SPREAD_SHARE).max(0.0);
         opts.occurrence * (1.0 + (SPREAD_BOOST - 1.0) * small_side * small_share)
     }

@@ -196,21 +196,11 @@ pub(crate) struct DepthBuffer {
 }
 
 impl DepthBuffer {
+    /// Every face of `mesh` seen by `camera`.
     pub(crate) fn render(camera: &dyn Camera, mesh: &TriMesh) -> DepthBuffer {
         let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
-        Self::render_projected(camera, mesh, &projected, |_| true)
-    }
-
-    /// Render with every vertex already projected (`None` when behind a
-    /// perspective camera's near plane), only the faces `drawn` keeps.
-    pub(crate) fn render_projected(
-        camera: &dyn Camera,
-        mesh: &TriMesh,
-        projected: &[Option<(DVec2, f64)>],
-        drawn: impl Fn(usize) -> bool,
-    ) -> DepthBuffer {
         let mut buffer = DepthBuffer::empty();
-        buffer.draw(camera, mesh, projected, drawn);
+        buffer.draw(camera, mesh, &projected, |_| true);
         buffer
     }
 
@@ -223,8 +213,10 @@ impl DepthBuffer {
         }
     }
 
-    /// `render_projected` into this buffer's memory: a view after view
-    /// reuses it rather than fault in new pages for every one.
+    /// Render into this buffer's memory, every vertex already projected
+    /// (`None` when behind a perspective camera's near plane), only the
+    /// faces `drawn` keeps: a view after view reuses the buffer rather than
+    /// fault in new pages for every one.
     pub(crate) fn draw(
         &mut self,
         camera: &dyn Camera,

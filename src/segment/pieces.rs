@@ -1,7 +1,8 @@
 //! A region's pieces and enclosed voids, in voxels, with the connectivity
 //! of the surface that `surface::march` puts round them.
 //!
-//! Marching tetrahedra over Kuhn's split joins two voxel centres by a
+//! Marching tetrahedra over Kuhn's split (whose topology `surface` keeps,
+//! `cubes`) joins two voxel centres by a
 //! tetrahedron edge when their offset is a non-zero 0/1 vector or its
 //! negative (the six face neighbours, six face diagonals and two main
 //! diagonals: 14 neighbours). The surface separates inside from outside
@@ -60,64 +61,98 @@ impl Pieces {
 }
 
 /// Label the pieces of `member` over a grid of `size` voxels (x fastest),
-/// by flood fill in voxel order: the same numbering on any machine.
+/// numbered in order of their first voxel: the same numbering on any
+/// machine.
+///
+/// Two passes in voxel order over the grid padded by a layer of
+/// non-members (Rosenfeld and Pfaltz's labelling, with union-find): the
+/// first gives each member the label of its neighbours before it (seven of
+/// the fourteen), joining their labels where they differ; the second
+/// numbers the joined labels. A flood fill visits a scan's outside (most
+/// of its voxels, for the voids) in an order that misses the cache at
+/// every step across slices.
 pub fn pieces(size: [usize; 3], member: &[bool], progress: &dyn Progress) -> Result<Pieces> {
     let [nx, ny, nz] = size;
     assert_eq!(member.len(), nx * ny * nz, "one flag per voxel");
+    let (px, py) = (nx + 2, ny + 2);
+    let padded = |x: usize, y: usize, z: usize| ((z + 1) * py + y + 1) * px + x + 1;
+    // The neighbours before a voxel in voxel order, as steps back.
+    let before: Vec<usize> = NEIGHBOURS
+        .iter()
+        .filter(|d| d.iter().all(|&c| c <= 0))
+        .map(|d| (-(d[2] * py as i64 + d[1]) * px as i64 - d[0]) as usize)
+        .collect();
+    // 0: not a member; else a provisional label plus one.
+    let mut label = vec![0u32; px * py * (nz + 2)];
+    let mut parent: Vec<u32> = Vec::new();
+    fn root(parent: &mut [u32], mut l: u32) -> u32 {
+        while parent[l as usize] != l {
+            let up = parent[parent[l as usize] as usize];
+            parent[l as usize] = up;
+            l = up;
+        }
+        l
+    }
+    for z in 0..nz {
+        progress::check(progress)?;
+        for y in 0..ny {
+            let row = (z * ny + y) * nx;
+            let at = padded(0, y, z);
+            for x in 0..nx {
+                if !member[row + x] {
+                    continue;
+                }
+                let i = at + x;
+                let mut mine = u32::MAX;
+                for &back in &before {
+                    let l = label[i - back];
+                    if l == 0 {
+                        continue;
+                    }
+                    let r = root(&mut parent, l - 1);
+                    if mine == u32::MAX {
+                        mine = r;
+                    } else if r != mine {
+                        let (lo, hi) = (r.min(mine), r.max(mine));
+                        parent[hi as usize] = lo;
+                        mine = lo;
+                    }
+                }
+                if mine == u32::MAX {
+                    mine = parent.len() as u32;
+                    parent.push(mine);
+                }
+                label[i] = mine + 1;
+            }
+        }
+    }
+    let mut number = vec![NONE; parent.len()];
     let mut of_voxel = vec![NONE; member.len()];
     let mut voxels = Vec::new();
     let mut at_border = Vec::new();
-    let mut stack: Vec<usize> = Vec::new();
-    let coords = |i: usize| {
-        [
-            (i % nx) as i64,
-            ((i / nx) % ny) as i64,
-            (i / (nx * ny)) as i64,
-        ]
-    };
-    let border = |c: [i64; 3]| {
-        c[0] == 0
-            || c[1] == 0
-            || c[2] == 0
-            || c[0] == nx as i64 - 1
-            || c[1] == ny as i64 - 1
-            || c[2] == nz as i64 - 1
-    };
-    for start in 0..member.len() {
-        if start % (nx * ny) == 0 {
-            progress::check(progress)?;
-        }
-        if !member[start] || of_voxel[start] != NONE {
-            continue;
-        }
-        let piece = voxels.len() as u32;
-        let (mut count, mut reaches) = (0u64, false);
-        of_voxel[start] = piece;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            count += 1;
-            let c = coords(i);
-            reaches |= border(c);
-            for d in NEIGHBOURS {
-                let n = [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
-                if n[0] < 0
-                    || n[1] < 0
-                    || n[2] < 0
-                    || n[0] >= nx as i64
-                    || n[1] >= ny as i64
-                    || n[2] >= nz as i64
-                {
+    for z in 0..nz {
+        for y in 0..ny {
+            let row = (z * ny + y) * nx;
+            let at = padded(0, y, z);
+            for x in 0..nx {
+                let l = label[at + x];
+                if l == 0 {
                     continue;
                 }
-                let j = (n[2] as usize * ny + n[1] as usize) * nx + n[0] as usize;
-                if member[j] && of_voxel[j] == NONE {
-                    of_voxel[j] = piece;
-                    stack.push(j);
+                let r = root(&mut parent, l - 1) as usize;
+                if number[r] == NONE {
+                    number[r] = voxels.len() as u32;
+                    voxels.push(0);
+                    at_border.push(false);
                 }
+                let piece = number[r];
+                of_voxel[row + x] = piece;
+                voxels[piece as usize] += 1;
+                let border =
+                    x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz;
+                at_border[piece as usize] |= border;
             }
         }
-        voxels.push(count);
-        at_border.push(reaches);
     }
     Ok(Pieces {
         of_voxel,

@@ -36,7 +36,7 @@ pub struct Args {
     /// Smoothing iterations (--smoother): takes the voxel staircase away
     /// without shrinking the region (the windowed sinc from about 10);
     /// 0 keeps the raw surface.
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    #[arg(long, default_value_t = segment::DEFAULT_SMOOTH as u32, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     smooth: u32,
     /// Keep every piece of the region (default: the largest, by voxels,
     /// with its enclosed voids).
@@ -51,7 +51,7 @@ pub struct Args {
     /// Decimate to at most this many faces: quadric error edge collapses
     /// that keep the surface closed, manifold and of the same genus, no
     /// angle made smaller than 20 degrees (default: every face marching
-    /// tetrahedra made, about two per boundary voxel face).
+    /// cubes made, about two per boundary voxel face).
     #[arg(long, value_parser = clap::value_parser!(u64).range(4..=1_000_000_000))]
     faces: Option<u64>,
     /// How the staircase is smoothed: taubin (lambda/mu; safe on thin

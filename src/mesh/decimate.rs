@@ -9,8 +9,8 @@
 //! surface or close a handle), which the unwrap and the tet mesher after
 //! this stage cannot take.
 
-use dary_heap::QuaternaryHeap;
-use std::cmp::Ordering;
+use radix_heap::RadixHeapMap;
+use std::cmp::Reverse;
 
 use glam::{DMat3, DVec3};
 
@@ -100,48 +100,33 @@ struct Candidate {
     to: DVec3,
 }
 
-/// A candidate as the heap holds it: its cost and edge. It is current
-/// while both ends are there and the cost recomputed when it is popped is
-/// the same (an end that moved or gathered another's quadric changes it;
-/// should it not, the collapse is the current one anyway). The heap holds
-/// every edge and the stale entries, millions for a scan's surface, and
-/// each pop walks it from top to bottom: at 16 bytes the four children of
-/// a 4-ary heap's (dary_heap) node span at most two cache lines, and a 4-ary
-/// heap has half a binary heap's levels (pops were a third of decimating a
-/// scan).
-struct Entry {
-    cost: f64,
-    a: u32,
-    b: u32,
-}
+/// The queue of candidates, cheapest first: a radix heap keyed by the
+/// cost's bits (a non-negative f64's bits order as it does). It holds
+/// every edge and the stale entries, millions for a scan's surface; a
+/// binary or 4-ary heap's pops walked it from top to bottom and were a
+/// fifth to a third of decimating a scan, where a radix heap's buckets are
+/// read in order. A radix heap takes no key below the last one popped:
+/// merging two ends' quadrics never lowers the least error round them,
+/// and the few costs that do fall (the optimum off the edge, its ends or
+/// middle taken instead) are queued at the last popped cost, to come next.
+/// An entry is current while both ends are there and the cost recomputed
+/// when it is popped has the same bits (an end that moved or gathered
+/// another's quadric changes it; should it not, the collapse is the
+/// current one anyway). Ties pop last in, first out: the same order on
+/// every run.
+#[derive(Default)]
+struct Queue(RadixHeapMap<Reverse<u64>, (u64, u32, u32)>);
 
-impl From<Candidate> for Entry {
-    fn from(c: Candidate) -> Entry {
-        Entry {
-            cost: c.cost,
-            a: c.a,
-            b: c.b,
-        }
+impl Queue {
+    fn push(&mut self, c: &Candidate) {
+        let bits = c.cost.to_bits();
+        let key = self.0.top().map_or(bits, |Reverse(top)| bits.max(top));
+        self.0.push(Reverse(key), (bits, c.a, c.b));
     }
-}
 
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Entry {
-    /// The cheapest first (a max-heap reversed), ties by the edge.
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.cost
-            .total_cmp(&self.cost)
-            .then_with(|| (o.a, o.b).cmp(&(self.a, self.b)))
+    /// The cheapest entry: its cost's bits and edge.
+    fn pop(&mut self) -> Option<(u64, u32, u32)> {
+        self.0.pop().map(|(_, v)| v)
     }
 }
 
@@ -436,8 +421,9 @@ pub fn decimate(
 /// Rounds of collapses, each after a round of flips and relaxation.
 const ROUNDS: usize = 6;
 /// Rounds of corner moves, collapses and flips of the faces under the
-/// cleanup's floor at the end.
-const CLEANUP_ROUNDS: usize = 8;
+/// cleanup's floor at the end, until a round changes nothing (on the MNI
+/// white matter at 50k faces that took 20, each a few milliseconds).
+const CLEANUP_ROUNDS: usize = 32;
 /// The cleanup works on the faces under MIN_ANGLE plus this (degrees), so
 /// the angles stay at MIN_ANGLE once positions are written as 32-bit
 /// floats (a face a fiftieth of a millimetre across loses 0.02 degrees).
@@ -467,11 +453,10 @@ fn collapse_to(
     let mut s = State::new(mesh);
     let mut envelope = tolerance.map(|t| Envelope::new(mesh, t));
     let (mut around, mut after) = (Vec::new(), Vec::new());
-    // Heapified at once, in linear time.
-    let mut heap: QuaternaryHeap<Entry> = edges(mesh)
-        .map(|(a, b)| Entry::from(s.candidate(a, b)))
-        .collect::<Vec<_>>()
-        .into();
+    let mut heap = Queue::default();
+    for (a, b) in edges(mesh) {
+        heap.push(&s.candidate(a, b));
+    }
     let mut scratch = [Vec::new(), Vec::new()];
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
@@ -481,13 +466,14 @@ fn collapse_to(
     let mut vertices = mesh.num_vertices();
     let mut since_check = 0;
     while live > faces {
-        let Some(c) = heap.pop() else { break };
-        let (a, b) = (c.a, c.b);
+        let Some((cost, a, b)) = heap.pop() else {
+            break;
+        };
         if s.removed[a as usize] || s.removed[b as usize] || vertices <= 4 {
             continue;
         }
         let current = s.candidate(a, b);
-        if current.cost.to_bits() != c.cost.to_bits() {
+        if current.cost.to_bits() != cost {
             continue;
         }
         let to = current.to;
@@ -509,7 +495,7 @@ fn collapse_to(
         vertices -= 1;
         s.neighbours(a, &mut scratch[0]);
         for &w in &scratch[0] {
-            heap.push(Entry::from(s.candidate(a, w)));
+            heap.push(&s.candidate(a, w));
         }
         since_check += 2;
         if since_check >= 4096 {
@@ -699,46 +685,47 @@ fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
 /// under the cleanup's floor may flip over a steeper crease where that
 /// moves the surface by little (`FLIP_MOVE`). The number of flips made.
 pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
-    // Fx hashing: a million edge keys a pass, and the map's order is never
-    // read (the edges go in sorted order).
-    use rustc_hash::FxHashMap as HashMap;
     let crease = MAX_CREASE.to_radians().cos();
     let floor = cleanup_floor();
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
     let mut flips = 0;
     for _ in 0..passes {
-        let mut edges: HashMap<(u32, u32), [u32; 2]> = HashMap::default();
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            for k in 0..3 {
-                let e = edges
-                    .entry(key(t[k], t[(k + 1) % 3]))
-                    .or_insert([u32::MAX; 2]);
-                let slot = if e[0] == u32::MAX { 0 } else { 1 };
-                e[slot] = f as u32;
+        // Half-edge `h` is corner h % 3 of face h / 3 running to the next
+        // corner (`edges::halfedge_endpoints`). Each pass visits the edges
+        // in order of their ends; a flip renames its edge to the new
+        // diagonal (not visited again this pass) and moves the half-edges
+        // of two others between the faces, so the arrays follow it:
+        // `opposite` and `edge_of` per half-edge, `half_of` per edge.
+        let table = super::edges::EdgeTable::new(&mesh.triangles);
+        let n = mesh.triangles.len() * 3;
+        let mut opposite = vec![u32::MAX; n];
+        let mut edge_of = vec![0u32; n];
+        let mut half_of = Vec::with_capacity(table.num_edges());
+        for (e, hs) in table.iter() {
+            for h in hs {
+                edge_of[h.idx()] = e.idx() as u32;
             }
+            if let [g, h] = *hs {
+                opposite[g.idx()] = h.idx() as u32;
+                opposite[h.idx()] = g.idx() as u32;
+            }
+            half_of.push(hs[0].idx() as u32);
         }
-        // In a fixed order, so the result does not hang on the map's.
-        let mut order: Vec<(u32, u32)> = edges.keys().copied().collect();
-        order.sort_unstable();
+        drop(table);
         let mut made = 0;
-        for e in order {
-            let Some(&[f0, f1]) = edges.get(&e) else {
-                continue;
-            };
-            if f1 == u32::MAX {
+        for e in 0..half_of.len() {
+            let h = half_of[e] as usize;
+            let g = opposite[h];
+            if g == u32::MAX {
                 continue;
             }
+            let g = g as usize;
+            let (f0, k) = (h / 3, h % 3);
+            let (f1, l) = (g / 3, g % 3);
             // f0 runs a -> b -> c, f1 runs b -> a -> d.
-            let t0 = mesh.triangles[f0 as usize];
-            let k = (0..3)
-                .find(|&k| key(t0[k], t0[(k + 1) % 3]) == e)
-                .expect("f0 holds e");
+            let t0 = mesh.triangles[f0];
             let (a, b, c) = (t0[k], t0[(k + 1) % 3], t0[(k + 2) % 3]);
-            let t1 = mesh.triangles[f1 as usize];
-            let Some(d) = t1.iter().copied().find(|&v| v != a && v != b) else {
-                continue;
-            };
-            if c == d || edges.contains_key(&key(c, d)) {
+            let d = mesh.triangles[f1][(l + 2) % 3];
+            if c == d || joined(mesh, &opposite, 3 * f0 + (k + 2) % 3, d) {
                 continue;
             }
             let p = |v: u32| mesh.positions[v as usize];
@@ -773,19 +760,33 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
             {
                 continue;
             }
-            mesh.triangles[f0 as usize] = [c, a, d];
-            mesh.triangles[f1 as usize] = [d, b, c];
-            edges.remove(&e);
-            edges.insert(key(c, d), [f0, f1]);
-            for (edge, from, to) in [(key(a, d), f1, f0), (key(b, c), f0, f1)] {
-                if let Some(pair) = edges.get_mut(&edge) {
-                    for slot in pair.iter_mut() {
-                        if *slot == from {
-                            *slot = to;
-                        }
-                    }
-                }
+            // The four outer half-edges, before: b -> c, c -> a in f0;
+            // a -> d, d -> b in f1.
+            let outer = [
+                3 * f0 + (k + 2) % 3,
+                3 * f1 + (l + 1) % 3,
+                3 * f1 + (l + 2) % 3,
+                3 * f0 + (k + 1) % 3,
+            ];
+            let (outer_opposite, outer_edge) =
+                (outer.map(|h| opposite[h]), outer.map(|h| edge_of[h]));
+            mesh.triangles[f0] = [c, a, d];
+            mesh.triangles[f1] = [d, b, c];
+            // After: f0's c -> a, a -> d; f1's d -> b, b -> c; and the
+            // new diagonal d -> c, c -> d, which takes edge e's name.
+            let slots = [3 * f0, 3 * f0 + 1, 3 * f1, 3 * f1 + 1];
+            for ((&h, o), edge) in slots.iter().zip(outer_opposite).zip(outer_edge) {
+                opposite[h] = o;
+                opposite[o as usize] = h as u32;
+                edge_of[h] = edge;
+                half_of[edge as usize] = h as u32;
             }
+            let (x, y) = (3 * f0 + 2, 3 * f1 + 2);
+            opposite[x] = y as u32;
+            opposite[y] = x as u32;
+            edge_of[x] = e as u32;
+            edge_of[y] = e as u32;
+            half_of[e] = x as u32;
             made += 1;
         }
         flips += made;
@@ -794,6 +795,39 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
         }
     }
     flips
+}
+
+/// Whether vertex `d` is a neighbour of the vertex half-edge `start`
+/// leaves: turning round it by the opposites one way, and where that meets
+/// a boundary, the other way too.
+fn joined(mesh: &TriMesh, opposite: &[u32], start: usize, d: u32) -> bool {
+    let corner = |h: usize, step: usize| mesh.triangles[h / 3][(h % 3 + step) % 3];
+    let mut h = start;
+    loop {
+        if corner(h, 1) == d {
+            return true;
+        }
+        // The next half-edge out of the same vertex: after the opposite.
+        let Some(o) = opposite.get(h).copied().filter(|&o| o != u32::MAX) else {
+            break;
+        };
+        h = 3 * (o as usize / 3) + (o as usize % 3 + 1) % 3;
+        if h == start {
+            return false;
+        }
+    }
+    h = start;
+    loop {
+        // The half-edge into the vertex before `h`, from a neighbour.
+        let into = 3 * (h / 3) + (h % 3 + 2) % 3;
+        if corner(into, 0) == d {
+            return true;
+        }
+        match opposite[into] {
+            u32::MAX => return false,
+            o => h = o as usize,
+        }
+    }
 }
 
 /// The largest angle (degrees) between two faces whose edge may flip

@@ -110,7 +110,7 @@ pub struct Segmentation {
 }
 
 fn default_smooth() -> usize {
-    20
+    crate::segment::DEFAULT_SMOOTH
 }
 
 fn default_segmentation_faces() -> usize {

@@ -9,12 +9,14 @@
 //!   map;
 //! - `nrrd`: NRRD label maps and 3D Slicer's segmentations (`.seg.nrrd`),
 //!   their segments' names;
-//! - `surface`: the region's boundary by marching tetrahedra, which never
-//!   makes a non-manifold vertex;
+//! - `surface`: the region's boundary by marching cubes with the topology
+//!   of marching tetrahedra (`cubes`), which never makes a non-manifold
+//!   vertex;
 //! - `smooth`: Taubin's lambda/mu smoothing, which takes the voxel
 //!   staircase away without shrinking the organ.
 
 pub mod contents;
+pub mod cubes;
 pub mod handles;
 pub mod nifti;
 pub mod nrrd;
@@ -168,7 +170,7 @@ pub struct MeshOptions {
     pub region: Region,
     /// Smoothing iterations (Taubin: each a lambda and a mu step;
     /// windowed sinc: each a Chebyshev term); 0: the raw
-    /// marching-tetrahedra surface.
+    /// marching-cubes surface.
     pub smooth: usize,
     pub smoother: Smoother,
     /// Keep every connected piece, not only the largest.
@@ -182,6 +184,16 @@ pub struct MeshOptions {
     /// Cut or plug the region's handles thinner than this, mm (`handles`).
     pub max_handle: Option<f64>,
 }
+
+/// Smoothing iterations by default (`MeshOptions::smooth`). Marching
+/// cubes' edges are about a voxel long, so each umbrella step reaches
+/// further than over marching tetrahedra's, for which 20 was chosen: at 10
+/// the MNI white matter's decimated surface has a lower spread of mean
+/// curvature (0.48 against 0.64 at 20) and lies nearer its voxels, the
+/// brain's is as smooth (0.11 against 0.10; VTK's 0.14), and a ball's
+/// extremes stay within half a voxel of its voxels' faces (at 20 they are
+/// pulled 0.55 in).
+pub const DEFAULT_SMOOTH: usize = 10;
 
 /// How the staircase is smoothed away (`smooth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -48,6 +48,22 @@ impl Envelope {
         }
     }
 
+    /// An envelope round `points` whose face `f` carries the points
+    /// `carried[f]` (a surface's pieces' envelopes joined).
+    pub fn from_parts(points: Vec<DVec3>, carried: Vec<Vec<u32>>, tolerance: f64) -> Envelope {
+        Envelope {
+            points,
+            carried,
+            tolerance_squared: tolerance * tolerance,
+            gathered: Vec::new(),
+        }
+    }
+
+    /// The points face `f` carries.
+    pub fn carried(&self, f: usize) -> &[u32] {
+        &self.carried[f]
+    }
+
     /// Whether every point `around` (the faces round the edge, those the
     /// collapse removes included) carry lies within the tolerance of one of
     /// `after` (each surviving face and its corners after the collapse):

@@ -20,6 +20,8 @@ use crate::error::{Error, Result};
 use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
+mod halves;
+
 /// No collapse may leave the faces it moves with an angle below this
 /// (degrees), or below the smallest angle they had, if that is less.
 /// Issue 40 asks for 20 at 50k faces. Marching tetrahedra's own faces are
@@ -285,6 +287,18 @@ impl State {
         }
     }
 
+    /// Each live edge once, as (smaller end, larger end), on a closed
+    /// surface; an open one's boundary edges that run down are left out
+    /// (a half's, whose ends are locked).
+    fn live_edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.triangles
+            .iter()
+            .zip(&self.alive)
+            .filter(|(_, alive)| **alive)
+            .flat_map(|(t, _)| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .filter(|(a, b)| a < b)
+    }
+
     /// The faces left, vertices in order of use.
     fn into_mesh(self) -> TriMesh {
         let faces: Vec<FaceId> = (0..self.triangles.len())
@@ -450,20 +464,39 @@ fn collapse_to(
     tolerance: Option<f64>,
     progress: &dyn Progress,
 ) -> Result<TriMesh> {
-    let mut s = State::new(mesh);
-    let mut envelope = tolerance.map(|t| Envelope::new(mesh, t));
+    let (mut s, mut envelope) = if mesh.num_faces() >= halves::SPLIT_FACES {
+        halves::collapse_halves(mesh, faces, tolerance, progress)?
+    } else {
+        (State::new(mesh), tolerance.map(|t| Envelope::new(mesh, t)))
+    };
+    collapse(&mut s, envelope.as_mut(), faces, None, progress)?;
+    Ok(s.into_mesh())
+}
+
+/// The greedy collapses on `s`, cheapest first, until it has `faces` live
+/// faces or none is allowed; none moves a `locked` vertex.
+fn collapse(
+    s: &mut State,
+    mut envelope: Option<&mut Envelope>,
+    faces: usize,
+    locked: Option<&[bool]>,
+    progress: &dyn Progress,
+) -> Result<()> {
+    let free = |v: u32| locked.is_none_or(|l| !l[v as usize]);
     let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut heap = Queue::default();
-    for (a, b) in edges(mesh) {
-        heap.push(&s.candidate(a, b));
+    for (a, b) in s.live_edges() {
+        if free(a) && free(b) {
+            heap.push(&s.candidate(a, b));
+        }
     }
     let mut scratch = [Vec::new(), Vec::new()];
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
-    let mut live = mesh.num_faces();
+    let mut live = s.alive.iter().filter(|&&a| a).count();
     // A tetrahedron is the smallest closed surface: the link condition
     // would let it fold into a doubled triangle.
-    let mut vertices = mesh.num_vertices();
+    let mut vertices = s.removed.iter().filter(|&&r| !r).count();
     let mut since_check = 0;
     while live > faces {
         let Some((cost, a, b)) = heap.pop() else {
@@ -495,7 +528,9 @@ fn collapse_to(
         vertices -= 1;
         s.neighbours(a, &mut scratch[0]);
         for &w in &scratch[0] {
-            heap.push(&s.candidate(a, w));
+            if free(w) {
+                heap.push(&s.candidate(a, w));
+            }
         }
         since_check += 2;
         if since_check >= 4096 {
@@ -504,7 +539,7 @@ fn collapse_to(
             since_check = 0;
         }
     }
-    Ok(s.into_mesh())
+    Ok(())
 }
 
 /// Collapses of the edges shorter than `SHORT_EDGE` times the median

@@ -223,6 +223,9 @@ mod tests {
             assert_eq!(c, t, "seed {seed}");
         }
         // A third on a scan; more on noise, whose lone voxels are octahedra.
-        assert!(2 * cube_faces < tet_faces, "{cube_faces} against {tet_faces}");
+        assert!(
+            2 * cube_faces < tet_faces,
+            "{cube_faces} against {tet_faces}"
+        );
     }
 }

@@ -120,7 +120,13 @@ pub(super) fn collapse_halves(
             }
             whole.triangles.push(t);
             if let Some(envelope) = envelope {
-                carried.push(envelope.carried(f).iter().map(|&p| h.whole[p as usize]).collect());
+                carried.push(
+                    envelope
+                        .carried(f)
+                        .iter()
+                        .map(|&p| h.whole[p as usize])
+                        .collect(),
+                );
             }
         }
     }
@@ -132,10 +138,12 @@ pub(super) fn collapse_halves(
 /// Which half each face is in: the side of the median of the faces'
 /// centres along the surface's longest axis (ties by face number).
 fn cut(mesh: &TriMesh) -> Vec<bool> {
-    let (lo, hi) = mesh.positions.iter().fold(
-        (DVec3::INFINITY, DVec3::NEG_INFINITY),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
     let extent = hi - lo;
     let axis = (0..3)
         .max_by(|&i, &j| extent[i].total_cmp(&extent[j]))
@@ -144,7 +152,12 @@ fn cut(mesh: &TriMesh) -> Vec<bool> {
         .triangles
         .iter()
         .enumerate()
-        .map(|(f, t)| (t.iter().map(|&v| mesh.positions[v as usize][axis]).sum(), f as u32))
+        .map(|(f, t)| {
+            (
+                t.iter().map(|&v| mesh.positions[v as usize][axis]).sum(),
+                f as u32,
+            )
+        })
         .collect();
     let middle = order.len() / 2;
     order.select_nth_unstable_by(middle, |x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
@@ -153,4 +166,36 @@ fn cut(mesh: &TriMesh) -> Vec<bool> {
         sides[f as usize] = true;
     }
     sides
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::decimate;
+    use crate::mesh::info::analyse;
+    use crate::mesh::shapes;
+    use crate::progress::Silent;
+
+    #[test]
+    fn a_torus_decimated_in_halves_is_the_same_on_one_thread_or_two() {
+        let mesh = shapes::torus(1.0, 0.35, 400, 130);
+        assert!(mesh.num_faces() >= super::SPLIT_FACES);
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| decimate(&mesh, 8000, 2, Some(0.002), &Silent).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert_eq!(one.positions, two.positions);
+        assert_eq!(one.triangles, two.triangles);
+        assert!(one.num_faces() <= 8000);
+        // Closed, manifold (`analyse` refuses otherwise), outward and a
+        // torus still.
+        let r = analyse(one, false).unwrap().report;
+        assert_eq!(
+            (r.boundary_edges, r.genus, r.normals),
+            (0, vec![1], Some("outward"))
+        );
+    }
 }

@@ -21,6 +21,7 @@ use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
 mod halves;
+mod tips;
 
 /// No collapse may leave the faces it moves with an angle below this
 /// (degrees), or below the smallest angle they had, if that is less.
@@ -413,7 +414,10 @@ pub fn decimate(
         flip_edges(&mut out, 1, false);
         relax_tangentially(&mut out, 1);
     }
-    if collapse_short_edges(&mut out) > 0 {
+    if collapse_short_edges(&mut out)
+        + tips::flatten_tips(&mut out, TIP_HEIGHT * envelope.unwrap_or(f64::INFINITY))
+        > 0
+    {
         flip_edges(&mut out, 1, false);
         relax_tangentially(&mut out, 1);
     }
@@ -434,6 +438,12 @@ pub fn decimate(
 
 /// Rounds of collapses, each after a round of flips and relaxation.
 const ROUNDS: usize = 6;
+/// The tallest tip flattened (`tips`), in envelope tolerances: on the MNI
+/// white matter at 50k faces, half a voxel takes its mean curvature's
+/// spread from 0.48 to 0.43 and leaves its distances to the voxels as they
+/// were; a voxel, to 0.39 with 3.6 voxels from them (2.9 before); no bound,
+/// 0.37 with 4.1.
+const TIP_HEIGHT: f64 = 2.0;
 /// Rounds of corner moves, collapses and flips of the faces under the
 /// cleanup's floor at the end, until a round changes nothing (on the MNI
 /// white matter at 50k faces that took 20, each a few milliseconds).

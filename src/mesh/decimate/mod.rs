@@ -423,8 +423,17 @@ pub fn decimate(
     }
     // The faces still under MIN_ANGLE, which the budget left: their
     // corners moved, needles collapsed, caps flipped over creases, each
-    // step only raising the worst angle where it acts.
+    // step only raising the worst angle where it acts, while there are
+    // any (the flips and relaxation go on evening the rest out, on every
+    // face, for nothing).
     for _ in 0..CLEANUP_ROUNDS {
+        let floor = cleanup_floor();
+        if (0..out.num_faces()).all(|f| {
+            let [a, b, c] = out.corners(f);
+            sharpness(a, b, c) <= floor
+        }) {
+            break;
+        }
         let changed = move_corners(&mut out, cleanup_floor(), MAX_TURN.to_radians().cos())
             + collapse_needles(&mut out)
             + flip_edges(&mut out, 2, true);

@@ -18,8 +18,8 @@ use glam::DVec3;
 
 use super::{Quadric, State, collapse};
 use crate::error::Result;
-use crate::mesh::TriMesh;
 use crate::mesh::envelope::Envelope;
+use crate::mesh::{FaceId, TriMesh};
 use crate::progress::Progress;
 
 /// Surfaces with fewer faces than this collapse whole (the halves' and
@@ -56,27 +56,14 @@ pub(super) fn collapse_halves(
         }
     }
     let half = |side: bool| {
-        let mut local = vec![u32::MAX; mesh.num_vertices()];
-        let mut whole = Vec::new();
-        let triangles: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .zip(&sides)
-            .filter(|(_, s)| **s == side)
-            .map(|(t, _)| {
-                t.map(|v| {
-                    if local[v as usize] == u32::MAX {
-                        local[v as usize] = whole.len() as u32;
-                        whole.push(v);
-                    }
-                    local[v as usize]
-                })
-            })
+        let faces: Vec<FaceId> = (0..mesh.num_faces())
+            .filter(|&f| sides[f] == side)
+            .map(FaceId::from)
             .collect();
-        let positions = whole.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let (mesh, whole) = crate::mesh::submesh::extract(mesh, &faces);
         let on_cut = whole.iter().map(|&v| sides_of[v as usize] == 3).collect();
         Half {
-            mesh: TriMesh::new(positions, triangles),
+            mesh,
             whole,
             on_cut,
         }

@@ -211,6 +211,19 @@ fn case(mask: u8) -> Case {
             _ => panic!("case {mask}: a piece with {} loops", loops.len()),
         }
     }
+    // Each directed edge once: a strip that came back to a rung, or a
+    // triangulation that joined two crossings twice, would give an edge
+    // four triangles (the test holds every case to the tetrahedra's loops).
+    let mut half: Vec<(u8, u8)> = out
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .collect();
+    half.sort_unstable();
+    assert!(
+        half.windows(2).all(|w| w[0] != w[1]),
+        "case {mask}: an edge twice"
+    );
     out
 }
 

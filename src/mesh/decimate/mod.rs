@@ -25,7 +25,7 @@ mod tips;
 
 /// No collapse may leave the faces it moves with an angle below this
 /// (degrees), or below the smallest angle they had, if that is less.
-/// Issue 40 asks for 20 at 50k faces. Marching tetrahedra's own faces are
+/// Issue 40 asks for 20 at 50k faces. A voxel surface's own faces are
 /// thinner, and the guard keeps them from being collapsed into better
 /// ones: rounds of flips and relaxation between the collapses even them
 /// out, and a cleanup at the end mends the faces the budget left under it
@@ -374,12 +374,13 @@ impl State {
 /// budget (every candidate would make an angle under `MIN_ANGLE`), a round
 /// of flips and relaxation evens the faces out and the collapses go on, up
 /// to `ROUNDS` times. Then the edges much shorter than the rest are
-/// collapsed (`collapse_short_edges`). Last, the faces still under
+/// collapsed (`collapse_short_edges`), and the low tips (`tips`). Last, the faces still under
 /// `MIN_ANGLE` (the budget stops the collapses before their guard has
 /// mended every face it was given) are mended where a corner's move, a
 /// collapse or a flip can (a best effort: the result's smallest angle is
-/// the caller's to report). Deterministic (one thread, ties broken by the
-/// edge). The error names why the budget was not reached.
+/// the caller's to report). Deterministic: the same bytes on any thread
+/// count (`halves`; equal costs pop last in, first out, `Queue`). The
+/// error names why the budget was not reached.
 pub fn decimate(
     mesh: &TriMesh,
     faces: usize,
@@ -831,7 +832,10 @@ pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
             let slots = [3 * f0, 3 * f0 + 1, 3 * f1, 3 * f1 + 1];
             for ((&h, o), edge) in slots.iter().zip(outer_opposite).zip(outer_edge) {
                 opposite[h] = o;
-                opposite[o as usize] = h as u32;
+                // A boundary edge (or one of three faces) has no opposite.
+                if o != u32::MAX {
+                    opposite[o as usize] = h as u32;
+                }
                 edge_of[h] = edge;
                 half_of[edge as usize] = h as u32;
             }

@@ -25,8 +25,9 @@ const TIP_FLATNESS: f64 = 0.7;
 /// Each tip collapsed into the neighbour that leaves the best smallest
 /// angle, where that keeps the surface manifold, no face it moves turns
 /// away from the way the tip's faces face together, the tip stands no
-/// more than `height` off the faces left, and their worst angle is at
-/// least the cleanup's floor or what the tip's faces had. The number
+/// more than `height` off the faces left, and the worst angle of the faces
+/// moved is at least the cleanup's floor or the worst among the faces
+/// round the edge before. The number
 /// collapsed.
 pub(super) fn flatten_tips(mesh: &mut TriMesh, height: f64) -> usize {
     let floor = cleanup_floor();

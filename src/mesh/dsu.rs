@@ -17,6 +17,18 @@ impl DisjointSets {
         }
     }
 
+    /// A new set of one element, and that element (`len() - 1`).
+    pub fn add(&mut self) -> usize {
+        self.parent.push(self.parent.len() as u32);
+        self.size.push(1);
+        self.parent.len() - 1
+    }
+
+    /// The number of elements.
+    pub fn len(&self) -> usize {
+        self.parent.len()
+    }
+
     /// Representative of `x`'s set (path halving).
     pub fn find(&mut self, mut x: usize) -> usize {
         while self.parent[x] as usize != x {

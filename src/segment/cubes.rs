@@ -35,6 +35,8 @@ use std::sync::OnceLock;
 
 use glam::DVec3;
 
+use crate::mesh::dsu::DisjointSets;
+
 /// A cube's corner `k` sits at (k & 1, k >> 1 & 1, k >> 2 & 1); a case's
 /// bit `k` is set when corner `k` is inside.
 pub fn corner(k: usize) -> [usize; 3] {
@@ -340,37 +342,24 @@ impl Case {
 
 /// The pieces of a cube's triangles: those joined by shared edges.
 fn pieces(triangles: &[[TetVertex; 3]]) -> Vec<Vec<[TetVertex; 3]>> {
-    let n = triangles.len();
-    let mut piece: Vec<usize> = (0..n).collect();
-    fn root(piece: &mut [usize], mut i: usize) -> usize {
-        while piece[i] != i {
-            i = piece[i];
-        }
-        i
-    }
     let edge = |t: &[TetVertex; 3], k: usize| {
         let (x, y) = (t[k], t[(k + 1) % 3]);
         (x.min(y), x.max(y))
     };
-    for i in 0..n {
+    let mut sets = DisjointSets::new(triangles.len());
+    for i in 0..triangles.len() {
         for j in 0..i {
-            let shared =
-                (0..3).any(|k| (0..3).any(|l| edge(&triangles[i], k) == edge(&triangles[j], l)));
-            if shared {
-                let (ri, rj) = (root(&mut piece, i), root(&mut piece, j));
-                piece[ri.max(rj)] = ri.min(rj);
+            if (0..3).any(|k| (0..3).any(|l| edge(&triangles[i], k) == edge(&triangles[j], l))) {
+                sets.union(i, j);
             }
         }
     }
-    let mut out: Vec<(usize, Vec<[TetVertex; 3]>)> = Vec::new();
-    for (i, t) in triangles.iter().enumerate() {
-        let r = root(&mut piece, i);
-        match out.iter_mut().find(|(p, _)| *p == r) {
-            Some((_, ts)) => ts.push(*t),
-            None => out.push((r, vec![*t])),
-        }
+    let (of_triangle, count) = sets.labels();
+    let mut out = vec![Vec::new(); count];
+    for (t, &p) in triangles.iter().zip(&of_triangle) {
+        out[p as usize].push(*t);
     }
-    out.into_iter().map(|(_, ts)| ts).collect()
+    out
 }
 
 /// A piece's boundary loops, each in the direction its triangles run it.

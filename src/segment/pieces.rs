@@ -16,6 +16,7 @@
 //! them and count the voids as tissue).
 
 use crate::error::Result;
+use crate::mesh::dsu::DisjointSets;
 use crate::progress::{self, Progress};
 
 /// The 14 neighbours of the Kuhn split (see the module's comment).
@@ -84,15 +85,7 @@ pub fn pieces(size: [usize; 3], member: &[bool], progress: &dyn Progress) -> Res
         .collect();
     // 0: not a member; else a provisional label plus one.
     let mut label = vec![0u32; px * py * (nz + 2)];
-    let mut parent: Vec<u32> = Vec::new();
-    fn root(parent: &mut [u32], mut l: u32) -> u32 {
-        while parent[l as usize] != l {
-            let up = parent[parent[l as usize] as usize];
-            parent[l as usize] = up;
-            l = up;
-        }
-        l
-    }
+    let mut sets = DisjointSets::new(0);
     for z in 0..nz {
         progress::check(progress)?;
         for y in 0..ny {
@@ -103,30 +96,27 @@ pub fn pieces(size: [usize; 3], member: &[bool], progress: &dyn Progress) -> Res
                     continue;
                 }
                 let i = at + x;
-                let mut mine = u32::MAX;
+                // The root of the neighbours' joined labels so far.
+                let mut mine = None;
                 for &back in &before {
                     let l = label[i - back];
                     if l == 0 {
                         continue;
                     }
-                    let r = root(&mut parent, l - 1);
-                    if mine == u32::MAX {
-                        mine = r;
-                    } else if r != mine {
-                        let (lo, hi) = (r.min(mine), r.max(mine));
-                        parent[hi as usize] = lo;
-                        mine = lo;
-                    }
+                    let r = sets.find(l as usize - 1);
+                    mine = match mine {
+                        Some(m) if m != r => {
+                            sets.union(m, r);
+                            Some(sets.find(m))
+                        }
+                        _ => Some(r),
+                    };
                 }
-                if mine == u32::MAX {
-                    mine = parent.len() as u32;
-                    parent.push(mine);
-                }
-                label[i] = mine + 1;
+                label[i] = mine.unwrap_or_else(|| sets.add()) as u32 + 1;
             }
         }
     }
-    let mut number = vec![NONE; parent.len()];
+    let mut number = vec![NONE; sets.len()];
     let mut of_voxel = vec![NONE; member.len()];
     let mut voxels = Vec::new();
     let mut at_border = Vec::new();
@@ -139,7 +129,7 @@ pub fn pieces(size: [usize; 3], member: &[bool], progress: &dyn Progress) -> Res
                 if l == 0 {
                     continue;
                 }
-                let r = root(&mut parent, l - 1) as usize;
+                let r = sets.find(l as usize - 1);
                 if number[r] == NONE {
                     number[r] = voxels.len() as u32;
                     voxels.push(0);

@@ -468,15 +468,6 @@ fn cleanup_floor() -> f64 {
     (MIN_ANGLE + CLEANUP_MARGIN).to_radians().cos()
 }
 
-/// Each edge of a closed manifold `mesh` once, as (smaller end, larger
-/// end): of its two half-edges, the one running up.
-fn edges(mesh: &TriMesh) -> impl Iterator<Item = (u32, u32)> + '_ {
-    mesh.triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .filter(|(a, b)| a < b)
-}
-
 /// Collapses until `faces` or until none is allowed.
 fn collapse_to(
     mesh: &TriMesh,
@@ -575,7 +566,9 @@ fn collapse(
 /// faces the spread of the mean curvature falls from 1.48 to 0.67). The
 /// number made.
 fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
-    let mut lengths: Vec<(f64, u32, u32)> = edges(mesh)
+    let mut s = State::new(mesh);
+    let mut lengths: Vec<(f64, u32, u32)> = s
+        .live_edges()
         .map(|(a, b)| {
             let length = mesh.positions[a as usize].distance(mesh.positions[b as usize]);
             (length, a, b)
@@ -593,7 +586,6 @@ fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
     lengths.retain(|e| e.0 < limit);
     lengths.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     let floor = SHORT_EDGE_ANGLE.to_radians().cos();
-    let mut s = State::new(mesh);
     let mut scratch = [Vec::new(), Vec::new()];
     let mut vertices = mesh.num_vertices();
     let mut made = 0;

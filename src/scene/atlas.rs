@@ -35,6 +35,11 @@ impl Atlas {
         (uv - self.lo) * self.density + DVec2::splat(MARGIN)
     }
 
+    /// The side of one texel in uv (mesh) units.
+    pub fn texel_size(&self) -> f64 {
+        1.0 / self.density
+    }
+
     /// Texture coordinates (0..1, v down) of chart uv `uv`.
     pub fn texcoord(&self, uv: DVec2) -> DVec2 {
         self.texel(uv) / DVec2::new(self.width as f64, self.height as f64)

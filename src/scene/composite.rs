@@ -212,6 +212,15 @@ pub struct Look {
 }
 
 impl Look {
+    /// The side of one texel of the tissue texture in chart (mesh) units.
+    pub fn texel_size(&self, textures: &[Texture]) -> f64 {
+        let texture = &textures[self.colour];
+        let scale = self.transform.scale[0]
+            .abs()
+            .max(self.transform.scale[1].abs());
+        1.0 / (scale * texture.width.max(texture.height) as f64).max(1e-300)
+    }
+
     /// Linear RGB at chart coordinates `uv`, averaged over `footprint`
     /// mesh units (0: the full-size textures).
     pub fn colour(&self, textures: &[Texture], uv: DVec2, footprint: f64) -> [f32; 3] {

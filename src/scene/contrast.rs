@@ -66,13 +66,14 @@ const ALONG: [f64; 5] = [0.2, 0.35, 0.5, 0.65, 0.8];
 /// The contrast figures of `node`. Every interior edge of the node is
 /// sampled on both sides at five points along it, each a tenth of the
 /// node's median edge length (at most two texels of the finest texture
-/// shown) in from the edge, towards the face's third corner (in the atlas of the facet owning that face, or from the
-/// layers); the edge is a border (owners differ), a
-/// seam (its ends' uvs differ between the two faces) or ordinary. The
-/// reference for seams and borders is the ordinary edges of the faces along
-/// them: the same textures, layers and sampling scale, so only the seam or
-/// border itself can take the figure above 1 (a facet-wide reference would
-/// count a seam that passes under a contrasty neighbour's ring as visible).
+/// shown) in from the edge, towards the face's third corner (in the atlas
+/// of the facet owning that face, or from the layers); the edge is a
+/// border (owners differ), a seam (its ends' uvs differ between the two
+/// faces) or ordinary. The reference for seams and borders is the ordinary
+/// edges of the faces along them: the same textures, layers and sampling
+/// scale, so only the seam or border itself can take the figure above 1 (a
+/// facet-wide reference would count a seam that passes under a contrasty
+/// neighbour's ring as visible).
 pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
     let topo = &node.topology;
     // Owner facet and piece face of every node face.
@@ -113,7 +114,7 @@ pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
     // brain's serosa has 0.08 mm texels: its pixels 7 apart differ by 6.4
     // of 255 on average, any two by 6.7, so at a tenth of its 2.6 mm edges
     // a seam between unrelated parts of the texture measured the same as
-    // an ordinary edge (1.00 unblended; 1.23 at two texels). One texel was
+    // an ordinary edge (1.00 unblended; 1.25 at two texels). One texel was
     // too fine: where a stalk's chart stretches one way, an edge's two
     // points are more texels apart across it than along it, and the
     // fundus polyp's 24 border edges read 1.43 at one texel, 1.25 at half,

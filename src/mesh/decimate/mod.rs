@@ -374,11 +374,11 @@ impl State {
 /// budget (every candidate would make an angle under `MIN_ANGLE`), a round
 /// of flips and relaxation evens the faces out and the collapses go on, up
 /// to `ROUNDS` times. Then the edges much shorter than the rest are
-/// collapsed (`collapse_short_edges`), and the low tips (`tips`). Last, the faces still under
-/// `MIN_ANGLE` (the budget stops the collapses before their guard has
-/// mended every face it was given) are mended where a corner's move, a
-/// collapse or a flip can (a best effort: the result's smallest angle is
-/// the caller's to report). Deterministic: the same bytes on any thread
+/// collapsed (`collapse_short_edges`), and the low tips (`tips`). Last,
+/// the faces still under `MIN_ANGLE` (the budget stops the collapses
+/// before their guard has mended every face it was given) are mended
+/// where a corner's move, a collapse or a flip can (a best effort: the
+/// result's smallest angle is the caller's to report). Deterministic: the same bytes on any thread
 /// count (`halves`; equal costs pop last in, first out, `Queue`). The
 /// error names why the budget was not reached.
 pub fn decimate(
@@ -435,7 +435,7 @@ pub fn decimate(
         }) {
             break;
         }
-        let changed = move_corners(&mut out, cleanup_floor(), MAX_TURN.to_radians().cos())
+        let changed = move_corners(&mut out, floor, MAX_TURN.to_radians().cos())
             + collapse_needles(&mut out)
             + flip_edges(&mut out, 2, true);
         relax_tangentially(&mut out, 1);

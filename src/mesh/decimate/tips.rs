@@ -27,8 +27,7 @@ const TIP_FLATNESS: f64 = 0.7;
 /// away from the way the tip's faces face together, the tip stands no
 /// more than `height` off the faces left, and the worst angle of the faces
 /// moved is at least the cleanup's floor or the worst among the faces
-/// round the edge before. The number
-/// collapsed.
+/// round the edge before. The number collapsed.
 pub(super) fn flatten_tips(mesh: &mut TriMesh, height: f64) -> usize {
     let floor = cleanup_floor();
     let mut s = State::new(mesh);

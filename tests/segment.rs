@@ -319,6 +319,11 @@ fn the_brain_from_the_mni_t1_is_a_sphere_written_by_the_cli() {
         f["min_angle"].as_f64().unwrap() >= organtex::mesh::decimate::MIN_ANGLE,
         "{f}"
     );
+    // Every corner of the voxel boundary within a voxel of the surface
+    // (issue 40; 1.06 before the fit to the voxels, `segment::fit`).
+    let fit = &f["fit"];
+    assert!(fit["farthest_before"].as_f64() > Some(1.0), "{fit}");
+    assert!(fit["farthest"].as_f64().is_none_or(|d| d <= 1.0), "{fit}");
     let mesh = organtex::mesh::io::read(&small).unwrap();
     assert_eq!(check_surface(&mesh, "brain50k.stl"), vec![0]);
 }

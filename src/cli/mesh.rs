@@ -208,6 +208,18 @@ pub fn run(args: Args) -> Result<()> {
         f.report.min_angle,
         f.seconds
     );
+    let fit = &f.report.fit;
+    let far = |count: usize, farthest: Option<f64>| {
+        let count = super::thousands(count);
+        farthest.map_or(count.clone(), |d| format!("{count} (the farthest {d:.2})"))
+    };
+    println!(
+        "  voxel boundary: {} corners, farther than {} voxel from the surface {}, before fitting {}",
+        super::thousands(fit.corners),
+        segment::fit::TOLERANCE,
+        far(fit.far, fit.farthest),
+        far(fit.far_before, fit.farthest_before),
+    );
     println!("wrote {}", f.output.display());
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! half-edge topology, defect detection and repair, components and genus,
 //! curvature, reading and writing, and the test shapes.
 
+pub(crate) mod bvh;
 pub mod closest;
 pub mod components;
 pub mod corners;

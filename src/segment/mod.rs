@@ -17,6 +17,7 @@
 
 pub mod contents;
 pub mod cubes;
+pub mod fit;
 pub mod handles;
 pub mod nifti;
 pub mod nrrd;
@@ -249,6 +250,8 @@ pub struct MeshReport {
     pub volume: f64,
     /// The smallest angle of any face, degrees.
     pub min_angle: f64,
+    /// How the surface was drawn back to the voxels (`fit`).
+    pub fit: fit::Fit,
     /// What `max_handle` did, genus before and after.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub handles: Option<handles::HandleFix>,
@@ -354,6 +357,13 @@ pub fn mesh(
             crate::mesh::decimate::decimate(&mesh, budget, RELAX_ROUNDS, Some(envelope), progress)
                 .map_err(|e| e.in_file(name))?;
     }
+    // Last, so no step after it moves the surface off the voxels again.
+    let held = fit::Voxels {
+        size: volume.size,
+        inside: &kept,
+        to_world: volume.to_world,
+    };
+    let fit = fit::fit(&mut mesh, &held, progress)?;
     let report = MeshReport {
         region_voxels,
         voxels,
@@ -371,6 +381,7 @@ pub fn mesh(
                 crate::mesh::decimate::min_angle(a, b, c)
             })
             .fold(180.0, f64::min),
+        fit,
         handles,
     };
     Ok((mesh, report))

@@ -14,9 +14,9 @@ use serde::Serialize;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::bvh::Bvh;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
+use crate::mesh::bvh::Bvh;
 
 /// No tetrahedron across this face (a boundary face).
 pub const NO_NEIGHBOUR: u32 = u32::MAX;

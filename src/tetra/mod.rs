@@ -18,7 +18,6 @@
 //! - `stuffing`: the BCC lattice, cut points, warping and stencils;
 //! - `io`: VTK (read and write), gmsh 4.1 and Medit writers.
 
-mod bvh;
 pub mod graded;
 pub mod io;
 pub mod march;

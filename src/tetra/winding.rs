@@ -21,8 +21,8 @@ use glam::DVec3;
 
 use rayon::prelude::*;
 
-use super::bvh::Bvh;
 use crate::mesh::TriMesh;
+use crate::mesh::bvh::Bvh;
 
 /// Far-field acceptance ratio: a node is one dipole when the query is
 /// farther than `BETA` times its radius (Barill et al. 2018 use 2).
@@ -267,7 +267,7 @@ fn balanced_edges(mesh: &TriMesh) -> bool {
 /// Hessian, `N . g + tr(J M) + 1/2 sum_i H_i : C_i` (`M`, `C` the node's
 /// first and second moments, see `Node`).
 #[inline]
-pub(crate) fn far_field(node: &super::bvh::Node, r: DVec3, dist2: f64) -> f64 {
+pub(crate) fn far_field(node: &crate::mesh::bvh::Node, r: DVec3, dist2: f64) -> f64 {
     let inv3 = 1.0 / (dist2 * dist2.sqrt());
     let inv5 = inv3 / dist2;
     let inv7 = inv5 / dist2;

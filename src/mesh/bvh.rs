@@ -2,7 +2,9 @@
 //! the tet mesher asks of a surface: the generalized winding number (each
 //! node carries the first-order far-field data of Barill et al. 2018, sec.
 //! 3.2), segment crossings (cut points) and the distance to the closest
-//! triangle (Hausdorff distances).
+//! triangle (Hausdorff distances); the last also by the decimation's
+//! envelope and the segmentation's fit to its voxels (`for_distances`,
+//! without the moments).
 //!
 //! Invariants: `tris` holds the triangles in leaf order, each leaf a
 //! contiguous range of at most `LEAF` of them; an internal node's left child
@@ -12,7 +14,7 @@
 
 use glam::{DMat3, DVec3};
 
-use crate::mesh::closest::closest_point;
+use super::closest::closest_point;
 
 /// Triangles per leaf.
 const LEAF: usize = 4;
@@ -47,14 +49,27 @@ pub(crate) struct Node {
 pub(crate) struct Bvh {
     pub nodes: Vec<Node>,
     pub tris: Vec<[DVec3; 3]>,
+    /// The index each of `tris` had in the list the tree was built from.
+    pub order: Vec<u32>,
 }
 
 impl Bvh {
     /// Build over `tris` (their order is not kept).
     pub fn new(tris: Vec<[DVec3; 3]>) -> Bvh {
+        let mut bvh = Bvh::for_distances(tris);
+        for i in (0..bvh.nodes.len()).rev() {
+            bvh.fill_moments(i);
+        }
+        bvh
+    }
+
+    /// `new` without the winding number's moments, for the distance
+    /// queries alone (half the build's time).
+    pub fn for_distances(tris: Vec<[DVec3; 3]>) -> Bvh {
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(2 * tris.len() / LEAF + 1),
             tris,
+            order: Vec::new(),
         };
         if !bvh.tris.is_empty() {
             let n = bvh.tris.len();
@@ -66,11 +81,38 @@ impl Bvh {
             let mut order: Vec<u32> = (0..n as u32).collect();
             bvh.build(&mut order, &mut centroids, 0);
             bvh.tris = order.iter().map(|&i| bvh.tris[i as usize]).collect();
-            for i in (0..bvh.nodes.len()).rev() {
-                bvh.fill_moments(i);
-            }
+            bvh.order = order;
         }
         bvh
+    }
+
+    /// The same tree over the same triangles moved (`for_distances`'s:
+    /// the moments are not kept up): each taken again by the index it was
+    /// built from, the boxes recomputed. Cheaper than building anew, and
+    /// as good while the triangles move little against their size.
+    pub fn refit(&mut self, corners: impl Fn(u32) -> [DVec3; 3]) {
+        for (t, &i) in self.tris.iter_mut().zip(&self.order) {
+            *t = corners(i);
+        }
+        // Children have larger indices than their parents.
+        for i in (0..self.nodes.len()).rev() {
+            let node = &self.nodes[i];
+            let (lo, hi) = if node.count > 0 {
+                let first = node.index as usize;
+                self.tris[first..first + node.count as usize]
+                    .iter()
+                    .flatten()
+                    .fold(
+                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+                    )
+            } else {
+                let (l, r) = (&self.nodes[i + 1], &self.nodes[node.index as usize]);
+                (l.lo.min(r.lo), l.hi.max(r.hi))
+            };
+            self.nodes[i].lo = lo;
+            self.nodes[i].hi = hi;
+        }
     }
 
     /// Recursive median split on the longest axis of the centroids' box.
@@ -329,8 +371,29 @@ impl Bvh {
     /// the largest of many distances (a Hausdorff distance), with the
     /// largest so far as `lower`.
     pub fn distance_between(&self, q: DVec3, lower: f64, upper: f64) -> f64 {
+        self.nearest(q, lower, upper).0.sqrt()
+    }
+
+    /// The triangle closest to `q`, as the index it had in the list the
+    /// tree was built from, and its point closest to `q`, where only one
+    /// farther than `lower` matters: none if a triangle lies within
+    /// `lower` (the search stops there).
+    pub fn closest_beyond(&self, q: DVec3, lower: f64) -> Option<(u32, DVec3)> {
+        match self.nearest(q, lower, f64::INFINITY) {
+            (d2, Some(k)) if d2 > lower * lower => {
+                Some((self.order[k], closest_point(q, &self.tris[k])))
+            }
+            _ => None,
+        }
+    }
+
+    /// The squared distance `distance_between` takes the root of, and
+    /// the triangle (its place in `tris`) at that distance, if one was
+    /// within `upper`.
+    fn nearest(&self, q: DVec3, lower: f64, upper: f64) -> (f64, Option<usize>) {
+        let mut found = None;
         if self.nodes.is_empty() {
-            return upper;
+            return (upper * upper, found);
         }
         let lower2 = lower * lower;
         let mut best2 = upper * upper;
@@ -344,8 +407,16 @@ impl Bvh {
             }
             let node = &self.nodes[i as usize];
             if node.count > 0 {
-                for t in &self.tris[node.index as usize..(node.index + node.count) as usize] {
-                    best2 = best2.min(closest_point(q, t).distance_squared(q));
+                let first = node.index as usize;
+                for (k, t) in self.tris[first..first + node.count as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    let d2 = closest_point(q, t).distance_squared(q);
+                    if d2 < best2 {
+                        best2 = d2;
+                        found = Some(first + k);
+                    }
                 }
                 if best2 <= lower2 {
                     break;
@@ -372,7 +443,7 @@ impl Bvh {
                 }
             }
         }
-        best2.sqrt()
+        (best2, found)
     }
 }
 
@@ -527,6 +598,19 @@ mod tests {
             let r = |k: u64| (crate::rng::hash(5, &[i, k]) as f64 / u64::MAX as f64) * 3.0 - 1.5;
             let q = DVec3::new(r(0), r(1), r(2));
             assert!((bvh.distance(q) - brute_distance(&tris, q)).abs() < 1e-12);
+            // The closest triangle by its index in the list given.
+            let (f, point) = bvh.closest_beyond(q, 0.0).unwrap();
+            assert!((point.distance(q) - brute_distance(&tris, q)).abs() < 1e-12);
+            assert_eq!(closest_point(q, &tris[f as usize]), point);
+            let beyond = |lower: f64| bvh.closest_beyond(q, lower).map(|(g, _)| g);
+            assert_eq!(beyond(point.distance(q) * 0.99), Some(f));
+            assert_eq!(beyond(point.distance(q) * 1.01), None);
+            // Moved and refitted, it still finds the closest.
+            let moved: Vec<[DVec3; 3]> =
+                tris.iter().map(|t| t.map(|p| p * 1.3 + q * 0.1)).collect();
+            let mut refitted = Bvh::for_distances(tris.clone());
+            refitted.refit(|i| moved[i as usize]);
+            assert!((refitted.distance(q) - brute_distance(&moved, q)).abs() < 1e-12);
             let b = DVec3::new(r(3), r(4), r(5));
             bvh.segment_crossings(q, b, &mut out);
             let mut brute: Vec<f64> = tris

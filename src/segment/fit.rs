@@ -198,7 +198,7 @@ pub fn fit(mesh: &mut TriMesh, voxels: &Voxels, progress: &dyn Progress) -> Resu
             faces_at[v as usize].push(f as u32);
         }
     }
-    let neighbours = vertex_neighbours(mesh);
+    let neighbours = super::smooth::vertex_neighbours(mesh);
     let mut report = Fit {
         corners: points.len(),
         far_before: 0,
@@ -376,22 +376,6 @@ const STIFFNESS: f64 = 0.25;
 const REACH: usize = 2;
 /// Gauss-Seidel sweeps per round.
 const SWEEPS: usize = 20;
-
-/// Each vertex's neighbours, once each.
-fn vertex_neighbours(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    let mut out = vec![Vec::new(); mesh.num_vertices()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            out[t[k] as usize].push(t[(k + 1) % 3]);
-            out[t[(k + 1) % 3] as usize].push(t[k]);
-        }
-    }
-    for list in &mut out {
-        list.sort_unstable();
-        list.dedup();
-    }
-    out
-}
 
 /// Whether moving vertex `v` to `to` turns none of its faces (`ring`) past
 /// `turn` (a cosine) and leaves their worst sharpness at most `floor`'s or

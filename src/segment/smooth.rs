@@ -131,7 +131,7 @@ fn umbrella_step(x: &[DVec3], neighbours: &[Vec<u32>], factor: f64) -> Vec<DVec3
 }
 
 /// Each vertex's neighbours along edges, sorted, once each.
-fn vertex_neighbours(mesh: &TriMesh) -> Vec<Vec<u32>> {
+pub(super) fn vertex_neighbours(mesh: &TriMesh) -> Vec<Vec<u32>> {
     let mut out = vec![Vec::new(); mesh.num_vertices()];
     for t in &mesh.triangles {
         for k in 0..3 {

@@ -15,8 +15,8 @@
 //! plus a membrane term, so a move spreads over a ring or two rather than
 //! raising a spike (`offsets`), each move kept only where it flips no face,
 //! turns none far, leaves none thinner than the decimation's guard allows
-//! and takes the vertex no farther off the voxels than `OFF_VOXELS` (or
-//! than it was), else halved or quartered. In rounds, until no corner is
+//! and keeps the vertex within `OFF_VOXELS` of the voxels' faces, else
+//! halved or quartered. In rounds, until no corner is
 //! beyond the tolerance; last of all steps, so nothing after it undoes it.
 //! Distances are in voxels: world units over the cube root of a voxel's
 //! volume, exact for the isotropic voxels of most segmentations.
@@ -49,9 +49,11 @@ const AIM: f64 = 0.75;
 /// normal points nearly across the way to a corner, the least-squares
 /// move along it would be long.
 const STEP: f64 = 0.5;
-/// How far from the voxels' faces a move may take a vertex (or no
-/// farther than it was), voxels: a face between two such vertices may
-/// bridge a sulcus a little farther out.
+/// How far from the voxels' faces a move may take a vertex, voxels (a
+/// vertex already farther stays): a face between two such vertices may
+/// bridge a sulcus a little farther out. Without this bound the moves
+/// dragged the white matter's surface across sulci, 3.5 voxels from any
+/// voxel face.
 const OFF_VOXELS: f64 = 0.6;
 /// The corners farther than this at first are the ones the rounds after
 /// the first look at, voxels: a corner nearer would need the moves meant

@@ -2,9 +2,8 @@
 //! the tet mesher asks of a surface: the generalized winding number (each
 //! node carries the first-order far-field data of Barill et al. 2018, sec.
 //! 3.2), segment crossings (cut points) and the distance to the closest
-//! triangle (Hausdorff distances); the last also by the decimation's
-//! envelope and the segmentation's fit to its voxels (`for_distances`,
-//! without the moments).
+//! triangle (Hausdorff distances); the last also by the segmentation's fit
+//! to its voxels (`for_distances`, without the moments, and `refit`).
 //!
 //! Invariants: `tris` holds the triangles in leaf order, each leaf a
 //! contiguous range of at most `LEAF` of them; an internal node's left child
@@ -64,7 +63,8 @@ impl Bvh {
     }
 
     /// `new` without the winding number's moments, for the distance
-    /// queries alone (half the build's time).
+    /// queries alone: `refit` moves the boxes and would leave moments
+    /// stale.
     pub fn for_distances(tris: Vec<[DVec3; 3]>) -> Bvh {
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(2 * tris.len() / LEAF + 1),

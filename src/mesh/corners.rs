@@ -52,12 +52,7 @@ pub fn keeps_facing(
 /// the tangent plane leaves the surface by about that squared times its
 /// curvature. The number made.
 pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
-    let mut faces_at = vec![Vec::new(); mesh.num_vertices()];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            faces_at[v as usize].push(f as u32);
-        }
-    }
+    let faces_at = mesh.faces_at_vertices();
     let mut made = 0;
     for f in 0..mesh.num_faces() {
         for v in mesh.triangles[f] {

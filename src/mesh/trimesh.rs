@@ -93,6 +93,30 @@ impl TriMesh {
         0.5 * self.face_area_vector(f).length()
     }
 
+    /// Each vertex's faces, in face order.
+    pub fn faces_at_vertices(&self) -> Vec<Vec<u32>> {
+        let mut faces_at = vec![Vec::new(); self.num_vertices()];
+        for (f, t) in self.triangles.iter().enumerate() {
+            for &v in t {
+                faces_at[v as usize].push(f as u32);
+            }
+        }
+        faces_at
+    }
+
+    /// Each vertex's unit normal, its faces' normals weighted by their
+    /// areas (zero where they cancel).
+    pub fn vertex_normals(&self) -> Vec<DVec3> {
+        let mut n = vec![DVec3::ZERO; self.num_vertices()];
+        for (f, t) in self.triangles.iter().enumerate() {
+            let a = self.face_area_vector(f);
+            for &v in t {
+                n[v as usize] += a;
+            }
+        }
+        n.into_iter().map(DVec3::normalize_or_zero).collect()
+    }
+
     /// Unit normal of face `f`, zero for a degenerate face.
     #[inline]
     pub fn face_normal(&self, f: usize) -> DVec3 {

@@ -556,7 +556,7 @@ fn build_node(
             parallel: true,
         });
     }
-    let normals = vertex_normals(&mesh);
+    let normals = mesh.vertex_normals();
     let (compositor, unblended) = timed(spans, "blending", name, || {
         compositors(&mesh, &facets, tissues)
     })?;
@@ -569,17 +569,6 @@ fn build_node(
         compositor,
         unblended,
     })
-}
-
-pub fn vertex_normals(mesh: &TriMesh) -> Vec<DVec3> {
-    let mut n = vec![DVec3::ZERO; mesh.num_vertices()];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        let a = mesh.face_area_vector(f);
-        for &v in t {
-            n[v as usize] += a;
-        }
-    }
-    n.into_iter().map(DVec3::normalize_or_zero).collect()
 }
 
 /// A facet's texture transform (KHR_texture_transform): one copy of the

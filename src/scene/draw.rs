@@ -661,7 +661,7 @@ impl DrawList {
     pub fn plain(meshes: &[&crate::mesh::TriMesh], highlight: Option<(usize, usize)>) -> DrawList {
         let mut list = DrawList::default();
         for (k, mesh) in meshes.iter().enumerate() {
-            let normals = super::build::vertex_normals(mesh);
+            let normals = mesh.vertex_normals();
             let (names, of_face) = match &mesh.facets {
                 Some(f) => (f.names.clone(), f.of_face.clone()),
                 None => (vec!["surface".to_string()], vec![0; mesh.num_faces()]),

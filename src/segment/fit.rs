@@ -30,6 +30,7 @@ use crate::mesh::bvh::Bvh;
 use crate::mesh::corners::{keeps_facing, sharpness};
 use crate::mesh::decimate::MIN_ANGLE;
 use crate::progress::{self, Progress};
+use crate::segment::ScalarVolume;
 
 /// The farthest a corner of the voxel boundary may lie from the surface,
 /// voxels: the diagonal staircase's sqrt(3)/2 and a little. A voxel face's
@@ -82,28 +83,27 @@ pub struct Fit {
     pub moves: usize,
 }
 
-/// A region's voxels as `fit` holds the surface to them: `inside` over a
-/// grid of `size` voxels, x fastest (outside the grid is outside), placed
-/// by `to_world`.
+/// A region's voxels as `fit` holds the surface to them: `inside`, one
+/// per voxel of `volume` (outside the grid is outside), placed by the
+/// volume's voxel-to-world map.
 pub struct Voxels<'a> {
-    pub size: [usize; 3],
+    pub volume: &'a ScalarVolume,
     pub inside: &'a [bool],
-    pub to_world: DAffine3,
 }
 
 impl Voxels<'_> {
     fn at(&self, x: i64, y: i64, z: i64) -> bool {
-        let [nx, ny, nz] = self.size.map(|n| n as i64);
+        let [nx, ny, nz] = self.volume.size.map(|n| n as i64);
         (0..nx).contains(&x)
             && (0..ny).contains(&y)
             && (0..nz).contains(&z)
-            && self.inside[((z * ny + y) * nx + x) as usize]
+            && self.inside[self.volume.index(x as usize, y as usize, z as usize)]
     }
 
     /// The corners of the voxel boundary: the lattice points where inside
     /// and outside voxels meet, in world units, in lattice order.
     pub fn corners(&self) -> Vec<DVec3> {
-        let [nx, ny, nz] = self.size;
+        let [nx, ny, nz] = self.volume.size;
         // Per slab of voxels, how many of the four voxels round each
         // lattice column (x - 1 and x, y - 1 and y) are inside; a corner's
         // eight are its two slabs' counts (sums rather than eight lookups
@@ -137,7 +137,7 @@ impl Voxels<'_> {
                     if count > 0 && count < 8 {
                         let (x, y) = (i % (nx + 1), i / (nx + 1));
                         let p = DVec3::new(x as f64 - 0.5, y as f64 - 0.5, z as f64 - 0.5);
-                        slab.push(self.to_world.transform_point3(p));
+                        slab.push(self.volume.to_world.transform_point3(p));
                     }
                 }
                 slab
@@ -188,18 +188,13 @@ static NEIGHBOURHOOD: std::sync::LazyLock<Vec<[i64; 3]>> = std::sync::LazyLock::
 /// distances are taken in parallel, the moves made in vertex order).
 pub fn fit(mesh: &mut TriMesh, voxels: &Voxels, progress: &dyn Progress) -> Result<Fit> {
     let points = voxels.corners();
-    let voxel = voxels.to_world.matrix3.determinant().abs().cbrt();
-    let to_voxel = voxels.to_world.inverse();
+    let voxel = voxels.volume.voxel_volume().cbrt();
+    let to_voxel = voxels.volume.to_world.inverse();
     progress.stage("fitting the surface to the voxels", ROUNDS as u64);
     let (tolerance, near, aim) = (TOLERANCE * voxel, NEAR * voxel, AIM * voxel);
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
-    let mut faces_at = vec![Vec::new(); mesh.num_vertices()];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            faces_at[v as usize].push(f as u32);
-        }
-    }
+    let faces_at = mesh.faces_at_vertices();
     let neighbours = super::smooth::vertex_neighbours(mesh);
     let mut report = Fit {
         corners: points.len(),
@@ -293,17 +288,7 @@ fn offsets(
     step: f64,
 ) -> Vec<DVec3> {
     let n = mesh.num_vertices();
-    let mut normals = vec![DVec3::ZERO; n];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        let [a, b, c] = mesh.corners(f);
-        let area = (b - a).cross(c - a);
-        for &v in t {
-            normals[v as usize] += area;
-        }
-    }
-    for m in &mut normals {
-        *m = m.normalize_or_zero();
-    }
+    let normals = mesh.vertex_normals();
     // Each miss: its face's corners, their coefficients (barycentric
     // weight times how far the vertex's normal points towards the
     // corner) and the way still to go.
@@ -433,7 +418,7 @@ mod tests {
     use super::*;
     use crate::mesh::closest::closest_point;
     use crate::progress::Silent;
-    use crate::segment::{MeshOptions, Region, ScalarVolume, Smoother, mesh};
+    use crate::segment::{MeshOptions, Region, Smoother, mesh};
 
     /// A ball of radius 9 voxels with two fins two voxels thick standing
     /// out of it, one square to the grid and one across its diagonal: thin
@@ -481,9 +466,8 @@ mod tests {
         assert!(fit.farthest_before > Some(1.0) && fit.moves > 0, "{fit:?}");
         let inside: Vec<bool> = volume.values.iter().map(|&v| v == 1.0).collect();
         let voxels = Voxels {
-            size: volume.size,
+            volume: &volume,
             inside: &inside,
-            to_world: volume.to_world,
         };
         let corners = voxels.corners();
         assert_eq!(corners.len(), fit.corners);

@@ -359,9 +359,8 @@ pub fn mesh(
     }
     // Last, so no step after it moves the surface off the voxels again.
     let held = fit::Voxels {
-        size: volume.size,
+        volume,
         inside: &kept,
-        to_world: volume.to_world,
     };
     let fit = fit::fit(&mut mesh, &held, progress)?;
     let report = MeshReport {

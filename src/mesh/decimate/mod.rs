@@ -664,13 +664,7 @@ fn collapse_needles(mesh: &mut TriMesh) -> usize {
 /// smallest angle among them no smaller. Evens the faces' shapes; the surface
 /// stays where it was to second order.
 fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
-    let n = mesh.num_vertices();
-    let mut faces_at = vec![Vec::new(); n];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            faces_at[v as usize].push(f as u32);
-        }
-    }
+    let faces_at = mesh.faces_at_vertices();
     for _ in 0..rounds {
         for (v, ring) in faces_at.iter().enumerate() {
             let mut normal = DVec3::ZERO;

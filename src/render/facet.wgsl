@@ -153,8 +153,15 @@ fn heat_colour(h: f32) -> vec3<f32> {
 
 // FILM_RELIEF (scene::draw::FILM_RELIEF) is prepended with the globals.
 const FILM_LEVELS: f32 = 2.5;
-// Where the film pools it levels the relief this many mip levels more.
+// Where the film pools it levels the relief this many mip levels more,
+// and flattens what is left of it to POOL_RELIEF of the thin film's: a
+// pool is a smooth lens over the tissue, so a smooth dome (a polyp's head)
+// glints once at the point that faces the scope, where the thin film's
+// relief would spread that glint into a dull sheen (on the default
+// preview, with FILM_RELIEF 8: 19 glints on 0.31% of the pixels, against
+// 43 on 0.47% with neither; real frames: 1 to 29, median 3).
 const POOL_LEVELS: f32 = 2.0;
+const POOL_RELIEF: f32 = 0.25;
 
 // The scope's depth of field. A hysteroscope's lens is fixed-focus, set
 // for the wall a few millimetres from its tip, and its small sensor
@@ -200,7 +207,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         // the relief faces the scope, as in real frames, not a sparkle on
         // every bump.
         let mf = textureSampleBias(normal_texture, normal_sampler, in.uv, FILM_LEVELS + POOL_LEVELS * wet + blur).xyz * 2.0 - 1.0;
-        let film_relief = bump * FILM_RELIEF;
+        let film_relief = bump * FILM_RELIEF * mix(1.0, POOL_RELIEF, wet);
         n_film = normalize(tbn * vec3<f32>(mf.xy * film_relief, mf.z));
         n = normalize(tbn * vec3<f32>(m.xy * bump, m.z));
         // Where the relief varies within a texel of the mip level sampled,

@@ -42,7 +42,7 @@ pub struct Args {
     /// exemplar: a candidate's cost is multiplied by 1 + this x how far its
     /// source is over-used (0: the paper's cost alone). Outputs under 512
     /// pixels a side with fewer pixels than 4x the exemplar's weigh it up to
-    /// 4x more.
+    /// 4x more, and 8x that again with under an eighth of its pixels.
     #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     occurrence: f64,
     /// Output PNG.

@@ -48,8 +48,12 @@
 //! which the deep pyramid below favours, leave most of it unseen. At 128
 //! and 256 pixels (outputs of 0.06 to 8 times the exemplar's pixels) the
 //! plain weight lost to Embark's completeness on 6 of 28 cases, the grown
-//! one on 1 (the fundus at 128, whose coarsest level copies one region of
-//! its uneven lighting).
+//! one on 1: the fundus at 128, 0.06 of its exemplar's pixels, copied one
+//! region of its uneven lighting (completeness 5.72 against 4.36). So an
+//! output with under an eighth of its exemplar's pixels (the whole
+//! output's share, not its level's: the coarse levels of a small output
+//! hold a larger share of their smaller exemplars) weighs it more again,
+//! up to 8x at a sixteenth (`SCARCE_SHARE`): 28 of 28.
 //!
 //! Pyramid depth (beyond the paper): by default the levels go down until
 //! the coarsest exemplar is about 16 pixels a side, where one 7 x 7
@@ -136,6 +140,10 @@ pub fn synthesize(
     let levels = pyramid.len();
     progress.stage("synthesis", (levels * opts.iterations) as u64);
 
+    // The output's pixels per usable exemplar pixel at the finest level
+    // (`Level::occurrence_weight`).
+    let usable = ex.valid.iter().filter(|&&v| v).count().max(1);
+    let whole_share = (opts.width * opts.height) as f64 / usable as f64;
     let mut state: Option<Level> = None;
     for l in (0..levels).rev() {
         check(progress)?;
@@ -148,7 +156,7 @@ pub fn synthesize(
         let buckets = ColourBuckets::new(src);
         for pass in 0..opts.iterations {
             check(progress)?;
-            level.pass(&buckets, opts, l as u64, pass as u64);
+            level.pass(&buckets, opts, whole_share, l as u64, pass as u64);
             progress.advance(1);
         }
         state = Some(level);
@@ -217,6 +225,18 @@ impl Synthesis {
 /// tuned with.
 const SPREAD_SHARE: f64 = 4.0;
 const SPREAD_BOOST: f64 = 4.0;
+/// Under this share of the whole output (an exemplar more than eight
+/// times the output's pixels) a small output's weight grows again, to
+/// `SCARCE_BOOST` times at half the share: the penalty counts copies, not
+/// shares, so a small output of a large photograph still copied one
+/// region of it (the fundus photograph at 128 pixels, 0.06 of its
+/// exemplar's: completeness 5.72 against Embark's 4.36; 4.18 with it,
+/// coherence 0.49 against 0.52, tools/compare_synth.py, median of 3
+/// seeds). At twice the weight it stayed at 5.65; grown from a half
+/// instead of an eighth, the fundus at 256 (a quarter) lost its coherence
+/// (0.70 against 0.59).
+const SCARCE_SHARE: f64 = 0.125;
+const SCARCE_BOOST: f64 = 8.0;
 
 /// Most pyramid levels, 2D or 3D: each halves the exemplar, so 16 would
 /// already need one 2^15 pixels a side (and shifts stay far from overflow).
@@ -440,11 +460,16 @@ impl<'a> Level<'a> {
     /// times the exemplar's usable pixels; below both, rising linearly
     /// with each to `SPREAD_BOOST` times it for an output half that side
     /// or less with a vanishing share (module doc: "Occurrence").
-    fn occurrence_weight(&self, opts: &SynthOptions) -> f64 {
+    fn occurrence_weight(&self, opts: &SynthOptions, whole_share: f64) -> f64 {
         let (side, small) = (opts.width.min(opts.height) as f64, SMALL_OUTPUT as f64);
         let small_side = ((small - side) / (small / 2.0)).clamp(0.0, 1.0);
         let small_share = (1.0 - self.share / SPREAD_SHARE).max(0.0);
-        opts.occurrence * (1.0 + (SPREAD_BOOST - 1.0) * small_side * small_share)
+        let scarce = 1.0
+            + (SCARCE_BOOST - 1.0)
+                * ((SCARCE_SHARE - whole_share) / (SCARCE_SHARE / 2.0)).clamp(0.0, 1.0);
+        opts.occurrence
+            * (1.0 + (SPREAD_BOOST - 1.0) * small_side * small_share)
+            * (1.0 + (scarce - 1.0) * small_side)
     }
 
     /// Output pixel at (x + dx, y + dy): wrapped when tileable, else `None`
@@ -464,8 +489,15 @@ impl<'a> Level<'a> {
     }
 
     /// One pass: every pixel visited once, classes in a seeded random order.
-    fn pass(&mut self, buckets: &ColourBuckets, opts: &SynthOptions, level: u64, pass: u64) {
-        let weight = self.occurrence_weight(opts);
+    fn pass(
+        &mut self,
+        buckets: &ColourBuckets,
+        opts: &SynthOptions,
+        whole_share: f64,
+        level: u64,
+        pass: u64,
+    ) {
+        let weight = self.occurrence_weight(opts, whole_share);
         let r = (opts.neighbourhood / 2) as i32;
         let k = (r + 1) as usize;
         let window = window(r);
@@ -698,14 +730,17 @@ mod depth_tests {
 
     #[test]
     fn the_occurrence_weight_grows_only_for_small_outputs_with_few_pixels() {
-        let weight = |out: usize, ex: usize| {
+        // The level's share, and the whole output's given apart.
+        let weight_of = |out: usize, ex: usize, whole: Option<f64>| {
             let src = exemplar(ex);
             let level = Level::random(&src, out, out, 0);
-            level.occurrence_weight(&options(out))
+            level.occurrence_weight(&options(out), whole.unwrap_or(level.share))
         };
+        let weight = |out: usize, ex: usize| weight_of(out, ex, Some(1.0));
         let plain = SynthOptions::default().occurrence;
         // 512 pixels a side or more, or 4x the exemplar's pixels: plain.
         assert_eq!(weight(512, 560), plain);
+        assert_eq!(weight_of(512, 2048, None), plain);
         assert_eq!(weight(128, 64), plain);
         // Small, and far fewer pixels than the exemplar: nearly 4x.
         let grown = weight(128, 560);
@@ -713,5 +748,11 @@ mod depth_tests {
         // Between 256 and 512 pixels the growth fades out.
         assert!(weight(384, 2048) < weight(256, 2048));
         assert!(weight(384, 2048) > plain);
+        // An output with under an eighth of its exemplar's pixels weighs it
+        // more again, 8x at a sixteenth (the fundus at 128: 0.06); at a
+        // quarter (the fundus at 256) not at all.
+        assert_eq!(weight_of(128, 560, Some(0.25)), grown);
+        assert!(weight_of(128, 560, Some(0.1)) > 1.5 * grown);
+        assert_eq!(weight_of(128, 560, Some(0.06)), 8.0 * grown);
     }
 }

@@ -93,8 +93,9 @@ def quality(organtex, exemplar, mask, texture):
 
 
 def database_cases(organtex, tmp, only):
-    """(name, exemplar, mask, output side) of every entry with a colour
-    output."""
+    """(name, exemplar, mask, output side, organtex's extra options) of
+    every entry with a colour output: its `[tissue.synthesis]`
+    occurrence, when it sets one, as the database builds it."""
     import tomllib
 
     index = tomllib.loads((ROOT / "database" / "index.toml").read_text())
@@ -107,17 +108,19 @@ def database_cases(organtex, tmp, only):
         rgb, mask = tmp / f"{t['id']}.png", tmp / f"{t['id']}-mask.png"
         split_alpha(rgba, rgb, mask)
         side = t.get("synthesis", {}).get("width", OUT_SIDE)
-        cases.append((t["id"], rgb, mask, side))
+        occurrence = t.get("synthesis", {}).get("occurrence")
+        extra = ["--occurrence", str(occurrence)] if occurrence is not None else []
+        cases.append((t["id"], rgb, mask, side, extra))
     return cases
 
 
 def compare(organtex, embark, case, seeds):
-    name, exemplar, mask, side = case
+    name, exemplar, mask, side, extra = case
     runs = []
     for seed in seeds:
         ours, theirs = exemplar.with_name("ours.png"), exemplar.with_name("embark.png")
         t_ours = timed([organtex, "synth", str(exemplar), "--size", str(side), "--tileable", "--seed", str(seed),
-                        "-o", str(ours)] + (["--mask", str(mask)] if mask else []))
+                        "-o", str(ours)] + (["--mask", str(mask)] if mask else []) + extra)
         # --sample-masks takes several values: an option must follow it.
         t_emb = timed([embark, "--tiling", "--no-progress", "--seed", str(seed), "--out-size", str(side)]
                       + (["--sample-masks", str(mask)] if mask else []) + ["--out", str(theirs), "generate", str(exemplar)])
@@ -154,16 +157,17 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         cases = database_cases(args.organtex, tmp, args.only)
-        cases += [(p.stem, p, None, OUT_SIDE) for p in sorted(UNTUNED.glob("*.png"))
+        cases += [(p.stem, p, None, OUT_SIDE, []) for p in sorted(UNTUNED.glob("*.png"))
                   if not args.only or p.stem in args.only]
-        cases += [(p.stem, p, None, OUT_SIDE) for p in args.images]
+        cases += [(p.stem, p, None, OUT_SIDE, []) for p in args.images]
         if args.sizes:
-            cases = [(name, ex, mask, size) for size in args.sizes for (name, ex, mask, _) in cases]
+            cases = [(name, ex, mask, size, extra) for size in args.sizes
+                     for (name, ex, mask, _, extra) in cases]
         if args.textures:
             for name in ("gravel", "brick", "grass"):
                 crop = tmp / f"{name}128.png"
                 centre_crop(TEXTURES / f"{name}.png", 128, crop)
-                cases.append((name, crop, None, 256))
+                cases.append((name, crop, None, 256, []))
         for case in cases:
             workdir = tmp / f"run-{case[0]}-{case[3]}"
             workdir.mkdir()
@@ -173,7 +177,8 @@ def main():
             if case[2]:
                 mask = workdir / "mask.png"
                 shutil.copy(case[2], mask)
-            r = compare(args.organtex, embark, (case[0], exemplar, mask, case[3]), range(1, args.seeds + 1))
+            r = compare(args.organtex, embark, (case[0], exemplar, mask, case[3], case[4]),
+                        range(1, args.seeds + 1))
             results.append(r)
             o, e = r["median"]["organtex"], r["median"]["embark"]
             verdict = f"time x{o['seconds'] / e['seconds']:.2f}, " + ("meets every target" if not r["misses"]

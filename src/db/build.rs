@@ -177,7 +177,7 @@ fn build_one(db: &Database, t: &Tissue, progress: &dyn Progress) -> Result<Built
                 iterations: p.iterations,
                 levels: None,
                 neighbourhood: p.neighbourhood,
-                occurrence: SynthOptions::default().occurrence,
+                occurrence: p.occurrence,
             };
             let source = db.root.join(&t.source);
             ex.check_neighbourhood(p.neighbourhood)

@@ -33,6 +33,7 @@
 //! iterations = 3
 //! neighbourhood = 7
 //! tileable = true
+//! occurrence = 0.1                  # FNPTS's occurrence penalty (default 0.1)
 //! ```
 
 use std::collections::HashSet;
@@ -102,6 +103,14 @@ pub struct SynthesisParams {
     pub neighbourhood: usize,
     #[serde(default = "default_true")]
     pub tileable: bool,
+    /// FNPTS's occurrence penalty (`SynthOptions::occurrence`): heavier
+    /// for a small exemplar whose copies lock into a lattice of repeats.
+    #[serde(default = "default_occurrence")]
+    pub occurrence: f64,
+}
+
+fn default_occurrence() -> f64 {
+    crate::synth::fnpts::SynthOptions::default().occurrence
 }
 
 fn default_iterations() -> usize {

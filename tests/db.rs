@@ -206,6 +206,51 @@ fn a_shelf_that_does_not_fit_the_outputs_is_refused_by_name() {
     }
 }
 
+/// An occurrence weight out of range is refused when the index is read,
+/// naming the index and the entry, before anything is built.
+#[test]
+fn an_occurrence_weight_out_of_range_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sources")).unwrap();
+    std::fs::copy(
+        shipped().join("sources/layered_wall.png"),
+        dir.path().join("sources/wall.png"),
+    )
+    .unwrap();
+    let index = |occurrence: &str| {
+        std::fs::write(
+            dir.path().join("index.toml"),
+            format!(
+                "[[tissue]]\nid = \"wall\"\nname = \"Wall\"\nkind = \"muscle\"\n\
+                 source = \"sources/wall.png\"\noutputs = [\"colour\"]\n\
+                 [tissue.synthesis]\nwidth = 64\nheight = 64\noccurrence = {occurrence}\n"
+            ),
+        )
+        .unwrap();
+        Database::open(dir.path())
+    };
+    assert_eq!(
+        index("0.5")
+            .unwrap()
+            .tissue("wall")
+            .unwrap()
+            .synthesis
+            .as_ref()
+            .unwrap()
+            .occurrence,
+        0.5
+    );
+    for bad in ["-1.0", "11.0", "nan"] {
+        let err = index(bad).unwrap_err().to_string();
+        assert!(
+            err.contains("index.toml")
+                && err.contains("tissue 'wall'")
+                && err.contains("synthesis.occurrence must be from 0 to 10"),
+            "{err}"
+        );
+    }
+}
+
 /// Every entry says how its photograph was taken, and surface tissues
 /// carry a wet finish (the renderer's and the .glb's clear coat).
 #[test]

@@ -323,6 +323,14 @@ impl Database {
                     )));
                 }
             }
+            let max = crate::synth::fnpts::MAX_OCCURRENCE;
+            if let Some(o) = t.synthesis.as_ref().map(|p| p.occurrence)
+                && !(0.0..=max).contains(&o)
+            {
+                return Err(fail(format!(
+                    "synthesis.occurrence must be from 0 to {max}, not {o}"
+                )));
+            }
             let synthesised = t
                 .outputs
                 .iter()

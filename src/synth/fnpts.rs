@@ -238,6 +238,9 @@ const SPREAD_BOOST: f64 = 4.0;
 const SCARCE_SHARE: f64 = 0.125;
 const SCARCE_BOOST: f64 = 8.0;
 
+/// The largest occurrence weight a synthesis takes.
+pub const MAX_OCCURRENCE: f64 = 10.0;
+
 /// Most pyramid levels, 2D or 3D: each halves the exemplar, so 16 would
 /// already need one 2^15 pixels a side (and shifts stay far from overflow).
 pub const MAX_LEVELS: usize = 16;
@@ -330,9 +333,9 @@ pub(super) fn check_search(
             "iterations must be from 1 to 16, not {iterations}"
         )));
     }
-    if !(0.0..=10.0).contains(&occurrence) {
+    if !(0.0..=MAX_OCCURRENCE).contains(&occurrence) {
         return Err(Error::invalid(format!(
-            "the occurrence weight must be from 0 to 10, not {occurrence}"
+            "the occurrence weight must be from 0 to {MAX_OCCURRENCE}, not {occurrence}"
         )));
     }
     Ok(())

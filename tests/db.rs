@@ -12,6 +12,19 @@ fn shipped() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("database")
 }
 
+/// A database folder of one source, the shipped `file` copied in as
+/// `sources/NAME`, for an index a test writes.
+fn with_source(file: &str, name: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sources")).unwrap();
+    std::fs::copy(
+        shipped().join("sources").join(file),
+        dir.path().join("sources").join(name),
+    )
+    .unwrap();
+    dir
+}
+
 #[test]
 fn the_shipped_database_lists_eight_real_entries() {
     let db = Database::open(&shipped()).unwrap();
@@ -30,13 +43,7 @@ fn the_shipped_database_lists_eight_real_entries() {
 
 #[test]
 fn building_is_deterministic() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir(dir.path().join("sources")).unwrap();
-    std::fs::copy(
-        shipped().join("sources/retina.jpg"),
-        dir.path().join("sources/retina.jpg"),
-    )
-    .unwrap();
+    let dir = with_source("retina.jpg", "retina.jpg");
     std::fs::write(
         dir.path().join("index.toml"),
         r#"
@@ -165,13 +172,7 @@ fn every_source_is_licensed_and_every_shelf_stocked() {
 
 #[test]
 fn a_shelf_that_does_not_fit_the_outputs_is_refused_by_name() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir(dir.path().join("sources")).unwrap();
-    std::fs::copy(
-        shipped().join("sources/layered_wall.png"),
-        dir.path().join("sources/wall.png"),
-    )
-    .unwrap();
+    let dir = with_source("layered_wall.png", "wall.png");
     let index = |shelf: &str, outputs: &str| {
         std::fs::write(
             dir.path().join("index.toml"),
@@ -210,13 +211,7 @@ fn a_shelf_that_does_not_fit_the_outputs_is_refused_by_name() {
 /// naming the index and the entry, before anything is built.
 #[test]
 fn an_occurrence_weight_out_of_range_is_refused_by_name() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir(dir.path().join("sources")).unwrap();
-    std::fs::copy(
-        shipped().join("sources/layered_wall.png"),
-        dir.path().join("sources/wall.png"),
-    )
-    .unwrap();
+    let dir = with_source("layered_wall.png", "wall.png");
     let index = |occurrence: &str| {
         std::fs::write(
             dir.path().join("index.toml"),

@@ -42,6 +42,42 @@ pub fn keeps_facing(
     after.length_squared() > 0.0 && reference.normalize().dot(after.normalize()) >= turn
 }
 
+/// The worst sharpness of the faces `ring` round vertex `v` with `v`
+/// moved to `to`, or infinity where one of them would not keep facing the
+/// way it does (`keeps_facing`, turned past `turn`, a cosine; a face of no
+/// area now held to `normal`, the ring's).
+pub fn worst_after_move(
+    mesh: &TriMesh,
+    ring: &[u32],
+    v: u32,
+    to: DVec3,
+    normal: DVec3,
+    turn: f64,
+) -> f64 {
+    let mut worst = f64::NEG_INFINITY;
+    for &g in ring {
+        let t = mesh.triangles[g as usize];
+        let [x, y, z] = t.map(|w| mesh.positions[w as usize]);
+        let [x1, y1, z1] = t.map(|w| {
+            if w == v {
+                to
+            } else {
+                mesh.positions[w as usize]
+            }
+        });
+        if !keeps_facing(
+            (y - x).cross(z - x),
+            (y1 - x1).cross(z1 - x1),
+            || normal,
+            turn,
+        ) {
+            return f64::INFINITY;
+        }
+        worst = worst.max(sharpness(x1, y1, z1));
+    }
+    worst
+}
+
 /// Moves of the corners of each face whose sharpness is above `floor`
 /// (the decimation's cleanup floor), each to the best of a few points
 /// round it in its tangent plane (twelve directions, three steps up to a
@@ -62,20 +98,11 @@ pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
             }
             let ring = &faces_at[v as usize];
             let p = mesh.positions[v as usize];
-            let corners = |t: [u32; 3], at: DVec3| {
-                t.map(|w| {
-                    if w == v {
-                        at
-                    } else {
-                        mesh.positions[w as usize]
-                    }
-                })
-            };
             let mut normal = DVec3::ZERO;
             let mut worst = f64::NEG_INFINITY;
             let mut shortest = f64::INFINITY;
             for &g in ring {
-                let [x, y, z] = corners(mesh.triangles[g as usize], p);
+                let [x, y, z] = mesh.corners(g as usize);
                 normal += (y - x).cross(z - x);
                 worst = worst.max(sharpness(x, y, z));
                 for q in [x, y, z] {
@@ -93,18 +120,7 @@ pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
                 for k in 0..12 {
                     let angle = k as f64 * std::f64::consts::PI / 6.0;
                     let to = p + step * shortest * (angle.cos() * u + angle.sin() * w);
-                    let mut new_worst = f64::NEG_INFINITY;
-                    for &g in ring {
-                        let t = mesh.triangles[g as usize];
-                        let [x, y, z] = corners(t, p);
-                        let [x1, y1, z1] = corners(t, to);
-                        let (n0, n1) = ((y - x).cross(z - x), (y1 - x1).cross(z1 - x1));
-                        if !keeps_facing(n0, n1, || normal, turn) {
-                            new_worst = f64::INFINITY;
-                            break;
-                        }
-                        new_worst = new_worst.max(sharpness(x1, y1, z1));
-                    }
+                    let new_worst = worst_after_move(mesh, ring, v, to, normal, turn);
                     if new_worst < best.0 {
                         best = (new_worst, to);
                     }

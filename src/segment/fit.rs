@@ -27,8 +27,8 @@ use rayon::prelude::*;
 use crate::error::Result;
 use crate::mesh::TriMesh;
 use crate::mesh::bvh::Bvh;
-use crate::mesh::corners::{keeps_facing, sharpness};
-use crate::mesh::decimate::MIN_ANGLE;
+use crate::mesh::corners::{sharpness, worst_after_move};
+use crate::mesh::decimate::{MAX_TURN, MIN_ANGLE};
 use crate::progress::{self, Progress};
 use crate::segment::ScalarVolume;
 
@@ -64,9 +64,6 @@ const OFF_VOXELS: f64 = 0.6;
 const CANDIDATE: f64 = 0.7;
 /// Rounds of moves at most.
 const ROUNDS: usize = 4;
-/// Nor may a move turn a face by more than this (degrees), the
-/// decimation's own bound.
-const MAX_TURN: f64 = 60.0;
 
 /// What `fit` did.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -368,33 +365,13 @@ const SWEEPS: usize = 20;
 /// `turn` (a cosine) and leaves their worst sharpness at most `floor`'s or
 /// what it was.
 fn keeps_shapes(mesh: &TriMesh, ring: &[u32], v: u32, to: DVec3, turn: f64, floor: f64) -> bool {
-    let (mut worst_old, mut worst_new) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-    let mut normal = DVec3::ZERO;
+    let (mut normal, mut worst) = (DVec3::ZERO, f64::NEG_INFINITY);
     for &f in ring {
         let [a, b, c] = mesh.corners(f as usize);
         normal += (b - a).cross(c - a);
+        worst = worst.max(sharpness(a, b, c));
     }
-    for &f in ring {
-        let t = mesh.triangles[f as usize];
-        let old = t.map(|w| mesh.positions[w as usize]);
-        let new = t.map(|w| {
-            if w == v {
-                to
-            } else {
-                mesh.positions[w as usize]
-            }
-        });
-        let (n0, n1) = (
-            (old[1] - old[0]).cross(old[2] - old[0]),
-            (new[1] - new[0]).cross(new[2] - new[0]),
-        );
-        if !keeps_facing(n0, n1, || normal, turn) {
-            return false;
-        }
-        worst_old = worst_old.max(sharpness(old[0], old[1], old[2]));
-        worst_new = worst_new.max(sharpness(new[0], new[1], new[2]));
-    }
-    worst_new <= worst_old.max(floor)
+    worst_after_move(mesh, ring, v, to, normal, turn) <= worst.max(floor)
 }
 
 /// The barycentric coordinates of `q` (a point of triangle `t`) as x, y, z.

@@ -32,8 +32,9 @@ mod tips;
 /// where a move, a collapse or a flip can (`decimate`; on the MNI white
 /// matter at 50k faces, all of them).
 pub const MIN_ANGLE: f64 = 20.0;
-/// Nor turn a face by more than this (degrees).
-const MAX_TURN: f64 = 60.0;
+/// Nor turn a face by more than this (degrees); nor may `segment::fit`'s
+/// moves.
+pub const MAX_TURN: f64 = 60.0;
 
 /// A symmetric 4x4 quadric, its upper triangle.
 #[derive(Clone, Copy, Default)]

@@ -209,7 +209,13 @@ pub fn choose<T>(
             }
         })
         .collect();
-    let cone = disc_curvature(&s.graph, &mesh.positions, &defect, radius, EXACT_DISC);
+    let cone = disc_curvature(
+        &s.graph,
+        &mesh.positions,
+        &defect,
+        radius,
+        opts.cone_threshold,
+    );
     let interior = |v: VertexId| s.interior(v);
     let mut terminals = select(
         &s.graph,
@@ -381,10 +387,6 @@ impl<T> Tries<T> {
         Ok(met)
     }
 }
-
-/// Discs of more vertices than this are sampled on a grid
-/// (`disc_curvature`); meshes up to about 250k faces are summed exactly.
-const EXACT_DISC: usize = 2000;
 
 /// A closed sphere needs at least one seam edge, so two terminals: the
 /// strongest cone (or `first`), and the vertex farthest from it.

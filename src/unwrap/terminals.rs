@@ -9,76 +9,89 @@
 //! Terminals are the strongest vertices, each at least `spacing` from the
 //! others (non-maximum suppression), down to a strength threshold.
 
+use std::collections::{HashMap, HashSet};
+
 use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::mesh::VertexId;
 use crate::mesh::graph::{DiscScratch, EdgeGraph, disc};
 
-/// Disc-summed curvature of every vertex: |sum of `defect` over its disc
-/// of `radius`|.
+/// Disc-summed curvature: |sum of `defect` over the disc of `radius`| at
+/// every vertex that could reach `threshold`, 0 elsewhere.
 ///
-/// Summing every vertex's own disc costs the vertex count times the disc's,
-/// and a disc covers a fixed share of the surface, so the cost grows with
-/// the square of the mesh's size: on a 900k-face bunny it was a third of
-/// the unwrap. Where a typical disc holds more than `exact_limit`
-/// vertices, a grid a quarter of the radius wide samples the sums instead:
-/// only each cell's first vertex gets its disc summed, the others 0. The
-/// sum moves little over a quarter of its radius, so terminals chosen
-/// among the samples lie within a cell of the exact ones.
+/// Summing every vertex's own disc costs the vertex count times the disc's
+/// (on the bunny, 28k discs of about 240 vertices: a sixth of its unwrap),
+/// and terminals only need the sums that reach the threshold. The sum
+/// moves little over a quarter of its radius, so a grid that wide samples
+/// it first, one disc per cell (its first vertex); then every vertex in or
+/// beside a cell whose sample reached `REFINE_SHARE` of the threshold gets
+/// its own disc summed. A vertex over the threshold has such a sample
+/// within a cell of it, so terminals chosen from these sums are those
+/// the exact sums give (a threshold of 0 sums every disc).
 pub fn disc_curvature(
     graph: &EdgeGraph,
     positions: &[DVec3],
     defect: &[f64],
     radius: f64,
-    exact_limit: usize,
+    threshold: f64,
 ) -> Vec<f64> {
     let n = graph.num_vertices();
-    let disc_sum = |scratch: &mut DiscScratch, v: usize| {
-        disc(graph, positions, VertexId::from(v), radius, scratch)
-            .iter()
-            .map(|u| defect[u.idx()])
-            .sum::<f64>()
-            .abs()
+    let sums = |vertices: &[usize]| -> Vec<f64> {
+        vertices
+            .par_iter()
+            .map_init(
+                || DiscScratch::new(n),
+                |scratch, &v| {
+                    disc(graph, positions, VertexId::from(v), radius, scratch)
+                        .iter()
+                        .map(|u| defect[u.idx()])
+                        .sum::<f64>()
+                        .abs()
+                },
+            )
+            .collect()
     };
-    let mut scratch = DiscScratch::new(n);
-    let probes: Vec<usize> = (0..16)
-        .map(|k| k * n / 16)
-        .filter(|&v| v < n && !graph.neighbours(VertexId::from(v)).is_empty())
-        .collect();
-    let typical = probes
-        .iter()
-        .map(|&v| disc(graph, positions, VertexId::from(v), radius, &mut scratch).len())
-        .sum::<usize>()
-        / probes.len().max(1);
-    if typical <= exact_limit {
-        return (0..n)
-            .into_par_iter()
-            .map_init(|| DiscScratch::new(n), disc_sum)
-            .collect();
-    }
-    // The first vertex with edges in each grid cell.
     let cell = radius / 4.0;
-    let key = |p: DVec3| (p / cell).floor().as_i64vec3().to_array();
-    let mut first = std::collections::HashMap::new();
-    let sampled: Vec<usize> = (0..n)
-        .filter(|&v| {
-            let edges = !graph.neighbours(VertexId::from(v)).is_empty();
-            edges && *first.entry(key(positions[v])).or_insert(v) == v
-        })
+    let key = |v: usize| (positions[v] / cell).floor().as_i64vec3().to_array();
+    let with_edges: Vec<usize> = (0..n)
+        .filter(|&v| !graph.neighbours(VertexId::from(v)).is_empty())
         .collect();
-    let sums: Vec<f64> = sampled
-        .par_iter()
-        .map_init(|| DiscScratch::new(n), |scratch, &v| disc_sum(scratch, v))
+    // The first vertex with edges in each cell.
+    let mut first = HashMap::new();
+    let sampled: Vec<usize> = with_edges
+        .iter()
+        .copied()
+        .filter(|&v| *first.entry(key(v)).or_insert(v) == v)
         .collect();
-    // Only the sampled vertices are candidates: a vertex that borrowed its
+    let sampled_sums = sums(&sampled);
+    // The cells in or beside one whose sample is strong enough.
+    let mut near_strong = HashSet::new();
+    for (&v, &sum) in sampled.iter().zip(&sampled_sums) {
+        if sum >= REFINE_SHARE * threshold {
+            let [x, y, z] = key(v);
+            for d in 0..27 {
+                near_strong.insert([x + d % 3 - 1, y + d / 3 % 3 - 1, z + d / 9 - 1]);
+            }
+        }
+    }
+    let refined: Vec<usize> = with_edges
+        .into_iter()
+        .filter(|&v| first[&key(v)] != v && near_strong.contains(&key(v)))
+        .collect();
+    let refined_sums = sums(&refined);
+    // A vertex with no sum of its own stays 0: one that borrowed its
     // cell's sum could be chosen where its own is under the threshold.
     let mut strength = vec![0.0; n];
-    for (&v, &sum) in sampled.iter().zip(&sums) {
+    for (&v, &sum) in sampled.iter().chain(&refined).zip(sampled_sums.iter().chain(&refined_sums)) {
         strength[v] = sum;
     }
     strength
 }
+
+/// The share of the threshold a cell's sampled disc sum must reach for
+/// the vertices in and beside the cell to be summed (`disc_curvature`).
+const REFINE_SHARE: f64 = 0.5;
 
 /// The strongest vertices, strongest first, no two within `spacing` of each
 /// other, none within `spacing` of `taken`, all at least `threshold` strong.

@@ -300,8 +300,8 @@ fn abf_is_as_conformal_as_lscm_on_the_same_cut_and_never_flips() {
         let topo = Topology::build(&chart).unwrap();
         let solution = abf::solve(&chart, &topo, &abf::AbfOptions::default()).unwrap();
         assert!(solution.converged, "{file}: residual {}", solution.residual);
-        let abf_uv = layout::from_angles(&chart, &topo, &solution.angles).unwrap();
-        let lscm_uv = layout::from_angles(&chart, &topo, &corner_angles(&chart)).unwrap();
+        let abf_uv = layout::from_angles(&chart, &topo, &solution.angles, None).unwrap();
+        let lscm_uv = layout::from_angles(&chart, &topo, &corner_angles(&chart), None).unwrap();
         assert_eq!(
             flatten::flipped(&chart, &abf_uv),
             0,

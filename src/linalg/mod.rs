@@ -10,15 +10,26 @@
 //! lacks.
 //!
 //! A `SpdPattern` fixes the sparsity once (ordering and symbolic
-//! factorisation included), so Newton iterations only refill values.
+//! factorisation included), so Newton iterations only refill values. The
+//! fill-reducing ordering (AMD) is most of a pattern's cost, and the
+//! systems an unwrap solves all live on one mesh's vertices (the estimate
+//! of each Seamster round, ABF++'s, the layout's, the balancing's): a
+//! `VertexOrder` orders the vertices once and every one of them takes its
+//! unknowns in that order (`SpdPattern::ordered`).
 //! Factorisation runs single-threaded: a parallel supernodal sum may round
 //! differently with the thread count, and organtex promises the same bytes
 //! on any number of threads; the callers parallelise around it instead.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
+use faer::sparse::linalg::amd;
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Par, Side};
+use faer::{Conj, Mat, Par, Side};
 
 use crate::error::{Error, Result};
 
@@ -32,76 +43,202 @@ pub struct SpdPattern {
     /// were not given in column order (`new`); `None` when they were
     /// (`from_columns`).
     slot: Option<Vec<u32>>,
-    llt: SymbolicLlt<usize>,
+    llt: Arc<SymbolicCholesky<usize>>,
     entries: usize,
 }
 
 /// A factorised SPD matrix.
 pub struct Cholesky {
-    llt: Llt<usize, f64>,
+    llt: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
     n: usize,
 }
 
+/// A fill-reducing elimination order of a mesh's vertices (AMD on its edge
+/// graph), for the systems whose unknowns are those vertices, some of
+/// them, or one or two per vertex.
+#[derive(Clone, Debug)]
+pub struct VertexOrder {
+    /// Each vertex's place in the order.
+    rank: Vec<u32>,
+}
+
+impl VertexOrder {
+    /// The order of `n` vertices joined by `edges`.
+    pub fn amd(n: usize, edges: impl Iterator<Item = (u32, u32)>) -> Result<VertexOrder> {
+        let positions: Vec<(u32, u32)> = edges
+            .map(|(a, b)| (a.max(b), a.min(b)))
+            .chain((0..n as u32).map(|v| (v, v)))
+            .collect();
+        let (col_ptr, rows, _) = gather_columns(n, &positions)?;
+        let nnz = rows.len();
+        let graph = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
+        let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+        let mut scratch = MemBuffer::new(amd::order_scratch::<usize>(n, nnz));
+        amd::order(
+            &mut fwd,
+            &mut inv,
+            graph.as_ref(),
+            amd::Control::default(),
+            MemStack::new(&mut scratch),
+        )
+        .map_err(|e| Error::invalid(format!("vertex ordering: {e:?}")))?;
+        Ok(VertexOrder {
+            rank: inv.into_iter().map(|r| r as u32).collect(),
+        })
+    }
+
+    /// The order of `n` vertices joined by the edges of `triangles`.
+    pub fn of_triangles(n: usize, triangles: &[[u32; 3]]) -> Result<VertexOrder> {
+        VertexOrder::amd(
+            n,
+            triangles
+                .iter()
+                .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]),
+        )
+    }
+
+    /// The order of a mesh whose vertex `v` is vertex `origin[v]` of this
+    /// one (a cut of it: the copies of a cut vertex come together).
+    pub fn pulled_back(&self, origin: &[u32]) -> VertexOrder {
+        let mut by_rank: Vec<u32> = (0..origin.len() as u32).collect();
+        by_rank.sort_by_key(|&v| (self.rank[origin[v as usize] as usize], v));
+        let mut rank = vec![0u32; origin.len()];
+        for (k, &v) in by_rank.iter().enumerate() {
+            rank[v as usize] = k as u32;
+        }
+        VertexOrder { rank }
+    }
+
+    /// The elimination order of a system whose unknowns are
+    /// `block * index[v] + j` (j < `block`) for the vertices with an
+    /// `index` (`u32::MAX`: none): the vertices' order, each vertex's
+    /// unknowns together.
+    pub fn unknowns(&self, index: &[u32], block: usize) -> Vec<usize> {
+        assert_eq!(index.len(), self.rank.len(), "one index per vertex");
+        let mut vertices: Vec<usize> = (0..index.len()).filter(|&v| index[v] != u32::MAX).collect();
+        vertices.sort_unstable_by_key(|&v| self.rank[v]);
+        vertices
+            .iter()
+            .flat_map(|&v| (0..block).map(move |j| block * index[v] as usize + j))
+            .collect()
+    }
+}
+
+/// The columns of the lower-triangle positions given (duplicates merged,
+/// rows sorted): column starts, rows, and the stored entry of each
+/// position. A counting sort gathers the columns and a marker per row
+/// deduplicates each, so only each column's few distinct rows are
+/// sorted: faer's own constructor sorts all the positions, which on an
+/// unwrap's layout (2.4M of them) cost as much as the factorisation.
+fn gather_columns(
+    n: usize,
+    positions: &[(u32, u32)],
+) -> Result<(Vec<usize>, Vec<usize>, Vec<u32>)> {
+    if let Some(&(r, c)) = positions.iter().find(|&&(r, c)| r < c || r as usize >= n) {
+        return Err(Error::invalid(format!(
+            "sparse pattern: ({r}, {c}) is not in the lower triangle of a {n} x {n} matrix"
+        )));
+    }
+    if positions.len() > u32::MAX as usize {
+        return Err(Error::invalid("sparse pattern: too many entries"));
+    }
+    // The positions, column by column, in their given order.
+    let mut by_column = vec![0u32; n + 1];
+    for &(_, c) in positions {
+        by_column[c as usize + 1] += 1;
+    }
+    for c in 0..n {
+        by_column[c + 1] += by_column[c];
+    }
+    let mut fill = by_column.clone();
+    let mut order = vec![0u32; positions.len()];
+    for (k, &(_, c)) in positions.iter().enumerate() {
+        order[fill[c as usize] as usize] = k as u32;
+        fill[c as usize] += 1;
+    }
+    // Each column's distinct rows, sorted, and where each position goes.
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut rows: Vec<usize> = Vec::new();
+    let mut slot = vec![0u32; positions.len()];
+    let mut slot_of_row = vec![u32::MAX; n];
+    col_ptr.push(0);
+    for c in 0..n {
+        let column = &order[by_column[c] as usize..by_column[c + 1] as usize];
+        let start = rows.len();
+        for &k in column {
+            let r = positions[k as usize].0 as usize;
+            if slot_of_row[r] == u32::MAX {
+                slot_of_row[r] = 0;
+                rows.push(r);
+            }
+        }
+        rows[start..].sort_unstable();
+        for (i, &r) in rows[start..].iter().enumerate() {
+            slot_of_row[r] = (start + i) as u32;
+        }
+        for &k in column {
+            slot[k as usize] = slot_of_row[positions[k as usize].0 as usize];
+        }
+        for &r in &rows[start..] {
+            slot_of_row[r] = u32::MAX;
+        }
+        col_ptr.push(rows.len());
+    }
+    Ok((col_ptr, rows, slot))
+}
+
+/// The symbolic Cholesky factorisation of a lower-triangle pattern, in
+/// the given elimination order (`None`: AMD's).
+fn symbolic_cholesky(
+    pattern: &SymbolicSparseColMat<usize>,
+    order: Option<&[usize]>,
+) -> Result<Arc<SymbolicCholesky<usize>>> {
+    let n = pattern.nrows();
+    let inverse = order.map(|fwd| {
+        let mut inv = vec![0usize; n];
+        for (k, &i) in fwd.iter().enumerate() {
+            inv[i] = k;
+        }
+        inv
+    });
+    let ordering = match (order, &inverse) {
+        (Some(fwd), Some(inv)) => {
+            if fwd.len() != n || inv.iter().enumerate().any(|(i, &k)| fwd[k] != i) {
+                return Err(Error::invalid(format!(
+                    "sparse pattern: the elimination order is not a permutation of {n} unknowns"
+                )));
+            }
+            SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, n))
+        }
+        _ => SymmetricOrdering::Amd,
+    };
+    factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, ordering, Default::default())
+        .map(Arc::new)
+        .map_err(|e| Error::invalid(format!("symbolic Cholesky: {e:?}")))
+}
+
 impl SpdPattern {
-    /// The pattern of the given positions, duplicates merged. The columns
-    /// are gathered by a counting sort and each column's rows deduplicated
-    /// with a marker per row, so only each column's few distinct rows are
-    /// sorted: faer's own constructor sorts all the positions, which on an
-    /// unwrap's layout (2.4M of them) cost as much as the factorisation.
+    /// The pattern of the given positions, duplicates merged, ordered by
+    /// AMD.
     pub fn new(n: usize, positions: &[(u32, u32)]) -> Result<SpdPattern> {
-        if let Some(&(r, c)) = positions.iter().find(|&&(r, c)| r < c || r as usize >= n) {
-            return Err(Error::invalid(format!(
-                "sparse pattern: ({r}, {c}) is not in the lower triangle of a {n} x {n} matrix"
-            )));
-        }
-        if positions.len() > u32::MAX as usize {
-            return Err(Error::invalid("sparse pattern: too many entries"));
-        }
-        // The positions, column by column, in their given order.
-        let mut by_column = vec![0u32; n + 1];
-        for &(_, c) in positions {
-            by_column[c as usize + 1] += 1;
-        }
-        for c in 0..n {
-            by_column[c + 1] += by_column[c];
-        }
-        let mut fill = by_column.clone();
-        let mut order = vec![0u32; positions.len()];
-        for (k, &(_, c)) in positions.iter().enumerate() {
-            order[fill[c as usize] as usize] = k as u32;
-            fill[c as usize] += 1;
-        }
-        // Each column's distinct rows, sorted, and where each position goes.
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut rows: Vec<usize> = Vec::new();
-        let mut slot = vec![0u32; positions.len()];
-        let mut slot_of_row = vec![u32::MAX; n];
-        col_ptr.push(0);
-        for c in 0..n {
-            let column = &order[by_column[c] as usize..by_column[c + 1] as usize];
-            let start = rows.len();
-            for &k in column {
-                let r = positions[k as usize].0 as usize;
-                if slot_of_row[r] == u32::MAX {
-                    slot_of_row[r] = 0;
-                    rows.push(r);
-                }
-            }
-            rows[start..].sort_unstable();
-            for (i, &r) in rows[start..].iter().enumerate() {
-                slot_of_row[r] = (start + i) as u32;
-            }
-            for &k in column {
-                slot[k as usize] = slot_of_row[positions[k as usize].0 as usize];
-            }
-            for &r in &rows[start..] {
-                slot_of_row[r] = u32::MAX;
-            }
-            col_ptr.push(rows.len());
-        }
+        SpdPattern::with_order(n, positions, None)
+    }
+
+    /// The pattern of the given positions, its unknowns eliminated in
+    /// `order` (`VertexOrder::unknowns`).
+    pub fn ordered(n: usize, positions: &[(u32, u32)], order: &[usize]) -> Result<SpdPattern> {
+        SpdPattern::with_order(n, positions, Some(order))
+    }
+
+    fn with_order(
+        n: usize,
+        positions: &[(u32, u32)],
+        order: Option<&[usize]>,
+    ) -> Result<SpdPattern> {
+        let (col_ptr, rows, slot) = gather_columns(n, positions)?;
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
-        let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower)
-            .map_err(|e| Error::invalid(format!("symbolic Cholesky: {e:?}")))?;
+        let llt = symbolic_cholesky(&symbolic, order)?;
         Ok(SpdPattern {
             n,
             symbolic,
@@ -126,8 +263,7 @@ impl SpdPattern {
         }));
         let entries = rows.len();
         let symbolic = SymbolicSparseColMat::new_unsorted_checked(n, n, col_start, None, rows);
-        let llt = SymbolicLlt::try_new(symbolic.as_ref(), Side::Lower)
-            .map_err(|e| Error::invalid(format!("symbolic Cholesky: {e:?}")))?;
+        let llt = symbolic_cholesky(&symbolic, None)?;
         Ok(SpdPattern {
             n,
             symbolic,
@@ -155,10 +291,28 @@ impl SpdPattern {
             }
             None => SparseColMat::new(self.symbolic.clone(), values.to_vec()),
         };
-        faer::set_global_parallelism(Par::Seq);
-        let llt = Llt::try_new_with_symbolic(self.llt.clone(), matrix.as_ref(), Side::Lower)
+        let mut values = vec![0.0; self.llt.len_val()];
+        let par = Par::Seq;
+        let mut scratch = MemBuffer::new(
+            self.llt
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        );
+        self.llt
+            .factorize_numeric_llt(
+                &mut values,
+                matrix.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            )
             .map_err(|e| Error::invalid(format!("the system is not positive definite ({e:?})")))?;
-        Ok(Cholesky { llt, n: self.n })
+        Ok(Cholesky {
+            llt: self.llt.clone(),
+            values,
+            n: self.n,
+        })
     }
 }
 
@@ -167,7 +321,14 @@ impl Cholesky {
     pub fn solve(&self, b: &mut [f64]) {
         assert_eq!(b.len(), self.n);
         let mut rhs = Mat::from_fn(self.n, 1, |i, _| b[i]);
-        self.llt.solve_in_place(rhs.as_mut());
+        let par = Par::Seq;
+        let mut scratch = MemBuffer::new(self.llt.solve_in_place_scratch::<f64>(1, par));
+        LltRef::new(&self.llt, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs.as_mut(),
+            par,
+            MemStack::new(&mut scratch),
+        );
         for (i, x) in b.iter_mut().enumerate() {
             *x = rhs[(i, 0)];
         }
@@ -211,5 +372,70 @@ mod tests {
         // Not positive definite: refused, not a panic.
         let negative: Vec<f64> = values.iter().map(|v| -v).collect();
         assert!(pattern.factor(&negative).is_err());
+    }
+
+    /// A grid's Laplacian plus identity, two unknowns per vertex, some
+    /// vertices left out: solved in a `VertexOrder` of the grid as by AMD,
+    /// and an order that is not a permutation is refused.
+    #[test]
+    fn a_vertex_order_solves_what_amd_solves() {
+        let side = 12u32;
+        let vertex = |x: u32, y: u32| y * side + x;
+        let mut triangles = Vec::new();
+        for y in 0..side - 1 {
+            for x in 0..side - 1 {
+                triangles.push([vertex(x, y), vertex(x + 1, y), vertex(x + 1, y + 1)]);
+                triangles.push([vertex(x, y), vertex(x + 1, y + 1), vertex(x, y + 1)]);
+            }
+        }
+        let n = (side * side) as usize;
+        let order = VertexOrder::of_triangles(n, &triangles).unwrap();
+        // Every third vertex has no unknowns.
+        let mut index = vec![u32::MAX; n];
+        let mut count = 0;
+        for (v, slot) in index.iter_mut().enumerate() {
+            if v % 3 != 0 {
+                *slot = count;
+                count += 1;
+            }
+        }
+        let unknowns = 2 * count as usize;
+        let mut positions = Vec::new();
+        let mut values = Vec::new();
+        for t in &triangles {
+            for k in 0..3 {
+                let (a, b) = (index[t[k] as usize], index[t[(k + 1) % 3] as usize]);
+                for j in 0..2 {
+                    for p in [a, b].into_iter().filter(|&p| p != u32::MAX) {
+                        positions.push((2 * p + j, 2 * p + j));
+                        values.push(1.5);
+                    }
+                    if a != u32::MAX && b != u32::MAX {
+                        let (r, c) = (2 * a.max(b) + j, 2 * a.min(b) + j);
+                        positions.push((r, c));
+                        values.push(-0.5);
+                    }
+                }
+            }
+        }
+        let rhs: Vec<f64> = (0..unknowns).map(|i| (i as f64 * 0.7).cos()).collect();
+        let solve = |pattern: SpdPattern| {
+            let mut x = rhs.clone();
+            pattern.factor(&values).unwrap().solve(&mut x);
+            x
+        };
+        let elimination = order.unknowns(&index, 2);
+        let mut sorted = elimination.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..unknowns).collect::<Vec<_>>());
+        let by_amd = solve(SpdPattern::new(unknowns, &positions).unwrap());
+        let by_vertices = solve(SpdPattern::ordered(unknowns, &positions, &elimination).unwrap());
+        for (a, b) in by_amd.iter().zip(&by_vertices) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+        let mut twice = elimination.clone();
+        twice[1] = twice[0];
+        assert!(SpdPattern::ordered(unknowns, &positions, &twice).is_err());
+        assert!(SpdPattern::ordered(unknowns, &positions, &elimination[1..]).is_err());
     }
 }

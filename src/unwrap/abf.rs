@@ -21,7 +21,7 @@
 use std::f64::consts::{PI, TAU};
 
 use crate::error::{Error, Result};
-use crate::linalg::SpdPattern;
+use crate::linalg::{SpdPattern, VertexOrder};
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh, VertexId};
 
@@ -169,7 +169,7 @@ const SETTLED: f64 = 1e-3;
 /// Flatten a disk-shaped chart's angles: ABF++ to convergence or the
 /// step cap.
 pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSolution> {
-    solve_until(mesh, topo, opts, &mut |_| None::<(f64, ())>).map(|(solution, _)| solution)
+    solve_until(mesh, topo, opts, None, &mut |_| None::<(f64, ())>).map(|(solution, _)| solution)
 }
 
 /// ABF++, stopping early once more steps would not improve the layout. On
@@ -186,11 +186,13 @@ pub fn solve(mesh: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<AbfSo
 /// score so far by no more than `SETTLED`, the run ends with the
 /// best-scored iterate, reported as not converged, and the layout its
 /// score came with (so the caller does not lay it out again); so it does
-/// at the step cap when a stall scored one.
+/// at the step cap when a stall scored one. `order`, when given, orders
+/// the mesh's vertices for the reduced system's factorisation.
 pub fn solve_until<T, F>(
     mesh: &TriMesh,
     topo: &Topology,
     opts: &AbfOptions,
+    order: Option<&VertexOrder>,
     score: &mut F,
 ) -> Result<(AbfSolution, Option<T>)>
 where
@@ -244,7 +246,14 @@ where
     }
     let pattern = match problem.rows.count {
         0 => None,
-        n => Some(SpdPattern::new(2 * n, &positions)?),
+        n => Some(match order {
+            Some(order) => SpdPattern::ordered(
+                2 * n,
+                &positions,
+                &order.unknowns(&problem.rows.of_vertex, 2),
+            )?,
+            None => SpdPattern::new(2 * n, &positions)?,
+        }),
     };
 
     let mut state = State {
@@ -598,7 +607,8 @@ mod tests {
                 assert!(wheel[v].abs() < 1e-9);
             }
         }
-        let uv = crate::unwrap::layout::from_angles(&chart, &chart_topo, &solution.angles).unwrap();
+        let uv = crate::unwrap::layout::from_angles(&chart, &chart_topo, &solution.angles, None)
+            .unwrap();
         assert_eq!(crate::unwrap::flatten::flipped(&chart, &uv), 0);
     }
 
@@ -618,7 +628,7 @@ mod tests {
         // the number of the stall.
         let run = |scores: &dyn Fn(usize) -> Option<f64>| {
             let mut seen: Vec<Vec<[f64; 3]>> = Vec::new();
-            let (solution, _) = solve_until(&chart, &topo, &opts, &mut |angles| {
+            let (solution, _) = solve_until(&chart, &topo, &opts, None, &mut |angles| {
                 seen.push(angles.to_vec());
                 scores(seen.len() - 1).map(|s| (s, ()))
             })

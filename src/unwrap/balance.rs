@@ -29,17 +29,20 @@ use rayon::prelude::*;
 use super::conformal::Dirichlet;
 use super::metrics::{double_area, face_double_area};
 use super::untangle::unfold_layout;
+use crate::linalg::VertexOrder;
 use crate::mesh::TriMesh;
 use crate::mesh::curvature::corner_angles;
 
 /// A chart's layout with area evened out, and how many rounds it took;
 /// `None` when the first round would flip more triangles or the chart's
-/// Laplacian cannot be factored (a chart of slivers).
+/// Laplacian cannot be factored (a chart of slivers). `order`, when given,
+/// orders the chart's vertices for the Laplacian's factorisation.
 pub fn balance(
     chart: &TriMesh,
     uv: &[DVec2],
     lambda: f64,
     max_rounds: usize,
+    order: Option<&VertexOrder>,
 ) -> Option<(Vec<DVec2>, usize)> {
     let n = chart.num_vertices();
     let faces = &chart.triangles;
@@ -66,8 +69,8 @@ pub fn balance(
     let pin = faces[0][0] as usize;
     let fixed: Vec<bool> = (0..n).map(|v| v == pin).collect();
     let angles = corner_angles(chart);
-    let laplacian = Dirichlet::new(chart, &angles, &fixed, false)
-        .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true))
+    let laplacian = Dirichlet::new(chart, &angles, &fixed, false, order)
+        .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true, order))
         .ok()?;
 
     // Triangles flipped, degenerate or not a number.
@@ -247,7 +250,7 @@ mod tests {
         let chart = TriMesh::new(positions, triangles);
         let topo = crate::mesh::Topology::build(&chart).unwrap();
         let angles = crate::mesh::curvature::corner_angles(&chart);
-        let uv = crate::unwrap::layout::from_angles(&chart, &topo, &angles).unwrap();
+        let uv = crate::unwrap::layout::from_angles(&chart, &topo, &angles, None).unwrap();
         let spread = |uv: &[DVec2]| {
             let logs: Vec<f64> = (0..chart.num_faces())
                 .map(|f| {
@@ -258,7 +261,7 @@ mod tests {
             let min = logs.iter().cloned().fold(f64::MAX, f64::min);
             max - min
         };
-        let (balanced, rounds) = balance(&chart, &uv, 0.5, 20).expect("balanced");
+        let (balanced, rounds) = balance(&chart, &uv, 0.5, 20, None).expect("balanced");
         assert!(rounds > 0);
         assert_eq!(crate::unwrap::flatten::flipped(&chart, &balanced), 0);
         assert!(

@@ -16,7 +16,7 @@ use glam::DVec2;
 
 use super::metrics::double_area;
 use crate::error::{Error, Result};
-use crate::linalg::{Cholesky, SpdPattern};
+use crate::linalg::{Cholesky, SpdPattern, VertexOrder};
 use crate::mesh::curvature::{angle_defects, corner_angles};
 use crate::mesh::{Topology, TriMesh, VertexId};
 
@@ -41,11 +41,13 @@ impl Dirichlet {
     /// then an average of its neighbours' (Tutte), so a harmonic layout
     /// cannot fold around a sliver, and no vertex leans on a single
     /// neighbour, at the price of exactness where triangles are obtuse.
+    /// `order`, when given, orders the free vertices (else AMD does).
     pub fn new(
         chart: &TriMesh,
         angles: &[[f64; 3]],
         fixed: &[bool],
         positive: bool,
+        order: Option<&VertexOrder>,
     ) -> Result<Dirichlet> {
         let mut referenced = vec![false; chart.num_vertices()];
         for t in &chart.triangles {
@@ -83,7 +85,15 @@ impl Dirichlet {
         }
         let matrix = match count {
             0 => None,
-            n => Some(SpdPattern::new(n as usize, &positions)?.factor(&values)?),
+            n => {
+                let pattern = match order {
+                    Some(order) => {
+                        SpdPattern::ordered(n as usize, &positions, &order.unknowns(&index, 1))?
+                    }
+                    None => SpdPattern::new(n as usize, &positions)?,
+                };
+                Some(pattern.factor(&values)?)
+            }
         };
         Ok(Dirichlet {
             index,
@@ -102,7 +112,7 @@ impl Dirichlet {
         let fixed: Vec<bool> = (0..chart.num_vertices())
             .map(|v| topo.is_boundary_vertex(VertexId::from(v)))
             .collect();
-        Dirichlet::new(chart, angles, &fixed, positive)
+        Dirichlet::new(chart, angles, &fixed, positive, None)
     }
 
     /// The weight of the edge opposite corner `c` of face `f`.
@@ -153,6 +163,24 @@ impl Dirichlet {
 /// Log scale factor u of every vertex of a disk chart (0 on the boundary).
 pub fn log_scale(chart: &TriMesh, topo: &Topology) -> Result<Vec<f64>> {
     Ok(LogScale::solve(chart, topo)?.u)
+}
+
+/// `log_scale` of the surface cut open through the `opened` vertices
+/// (its boundary and its cut's), solved on the uncut surface: a vertex
+/// off the cut has the same neighbours, weights and defect in both, and
+/// every copy of a cut vertex is held at 0, so the cut surface need not
+/// be built, and one vertex order serves every cut. `angles` and `defect`
+/// are the surface's (`corner_angles`, `angle_defects`).
+pub fn log_scale_opened(
+    surface: &TriMesh,
+    angles: &[[f64; 3]],
+    defect: &[f64],
+    opened: &[bool],
+    order: &VertexOrder,
+) -> Result<Vec<f64>> {
+    let dirichlet = Dirichlet::new(surface, angles, opened, false, Some(order))?;
+    let source: Vec<f64> = defect.iter().map(|d| -d).collect();
+    Ok(dirichlet.solve(&vec![0.0; surface.num_vertices()], &source))
 }
 
 /// The log scale factor and what it was solved from.

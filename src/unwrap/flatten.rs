@@ -18,6 +18,7 @@ use super::layout;
 use super::metrics;
 use super::untangle::unfold_layout;
 use crate::error::Result;
+use crate::linalg::VertexOrder;
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh};
 
@@ -84,7 +85,13 @@ pub fn conf_mean(chart: &TriMesh, uv: &[DVec2]) -> f64 {
     }))
 }
 
+/// Flatten a disk chart. Its systems (ABF++'s, the layouts', the
+/// balancing's) all take their unknowns in one AMD order of its vertices:
+/// ordering a system is most of its symbolic factorisation, and AMD on
+/// the vertices gives ABF++'s two unknowns per vertex the fill it finds
+/// on the unknowns themselves.
 pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Flattened> {
+    let order = &VertexOrder::of_triangles(chart.num_vertices(), &chart.triangles)?;
     // A layout that flipped a few slivers is unfolded vertex by vertex;
     // one without flips then has its area evened out.
     let unfold = |mut uv: Vec<DVec2>| {
@@ -93,22 +100,37 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         (uv, before.saturating_sub(left), left)
     };
     let balanced = |uv: Vec<DVec2>| {
-        balance(chart, &uv, opts.area_weight, opts.balance_rounds).unwrap_or((uv, 0))
+        balance(
+            chart,
+            &uv,
+            opts.area_weight,
+            opts.balance_rounds,
+            Some(order),
+        )
+        .unwrap_or((uv, 0))
     };
     // A stalled ABF++ iterate is scored by its layout's conformality, when
     // that has no flips left after unfolding; the layout of the one kept
     // comes back with it.
     let mut score = |angles: &[[f64; 3]]| {
-        let (uv, unfolded, left) = unfold(layout::from_angles(chart, topo, angles).ok()?);
+        let (uv, unfolded, left) =
+            unfold(layout::from_angles(chart, topo, angles, Some(order)).ok()?);
         (left == 0).then(|| (conf_mean(chart, &uv), (uv, unfolded, left)))
     };
-    let solved = abf::solve_until(chart, topo, opts, &mut score).and_then(|(solution, laid)| {
-        let laid = match laid {
-            Some(laid) => laid,
-            None => unfold(layout::from_angles(chart, topo, &solution.angles)?),
-        };
-        Ok((solution, laid))
-    });
+    let solved = abf::solve_until(chart, topo, opts, Some(order), &mut score).and_then(
+        |(solution, laid)| {
+            let laid = match laid {
+                Some(laid) => laid,
+                None => unfold(layout::from_angles(
+                    chart,
+                    topo,
+                    &solution.angles,
+                    Some(order),
+                )?),
+            };
+            Ok((solution, laid))
+        },
+    );
     let abf_method = |solution: &abf::AbfSolution, unfolded, balance_rounds| Method::AbfPlusPlus {
         iterations: solution.iterations,
         residual: solution.residual,
@@ -179,7 +201,12 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         Ok(bff) => (Some(bff), reason),
         Err(e) => (None, format!("{reason}; boundary first flattening: {e}")),
     };
-    let lscm = unfold(layout::from_angles(chart, topo, &corner_angles(chart))?);
+    let lscm = unfold(layout::from_angles(
+        chart,
+        topo,
+        &corner_angles(chart),
+        Some(order),
+    )?);
     Ok(match bff {
         Some((uv, unfolded, left)) if left <= lscm.2 => {
             let (uv, balance_rounds) = balanced(uv);
@@ -225,7 +252,8 @@ mod tests {
         let flat = flatten(&chart, &chart_topo, &unbalanced).unwrap();
         assert_eq!(super::flipped(&chart, &flat.uv), 0);
         let bff = boundary_first(&chart, &chart_topo).unwrap();
-        let angles = layout::from_angles(&chart, &chart_topo, &corner_angles(&chart)).unwrap();
+        let angles =
+            layout::from_angles(&chart, &chart_topo, &corner_angles(&chart), None).unwrap();
         let (kept, other) = match &flat.method {
             Method::AbfPlusPlus {
                 converged,

@@ -11,11 +11,17 @@
 use glam::{DVec2, DVec3};
 
 use crate::error::Result;
-use crate::linalg::SpdPattern;
+use crate::linalg::{SpdPattern, VertexOrder};
 use crate::mesh::{Topology, TriMesh, VertexId};
 
-/// Uvs of a disk-shaped chart whose corners should have `angles`.
-pub fn from_angles(mesh: &TriMesh, topo: &Topology, angles: &[[f64; 3]]) -> Result<Vec<DVec2>> {
+/// Uvs of a disk-shaped chart whose corners should have `angles`; `order`,
+/// when given, orders the chart's vertices for the factorisation.
+pub fn from_angles(
+    mesh: &TriMesh,
+    topo: &Topology,
+    angles: &[[f64; 3]],
+    order: Option<&VertexOrder>,
+) -> Result<Vec<DVec2>> {
     let n = mesh.num_vertices();
     let (pin_a, pin_b) = pins(mesh, topo);
     let pinned_uv = |v: usize| {
@@ -69,7 +75,10 @@ pub fn from_angles(mesh: &TriMesh, topo: &Topology, angles: &[[f64; 3]]) -> Resu
             }
         }
     }
-    let pattern = SpdPattern::new(unknowns, &positions)?;
+    let pattern = match order {
+        Some(order) => SpdPattern::ordered(unknowns, &positions, &order.unknowns(&free, 2))?,
+        None => SpdPattern::new(unknowns, &positions)?,
+    };
     pattern.factor(&values)?.solve(&mut rhs);
     Ok((0..n)
         .map(|v| {

@@ -30,7 +30,8 @@ use super::cutgraph::{Cut, assert_disks, connect_pieces, cut, handle_loops};
 use super::steiner::{self, prune_leaves};
 use super::terminals::{disc_curvature, select};
 use crate::error::Result;
-use crate::mesh::curvature::Curvature;
+use crate::linalg::VertexOrder;
+use crate::mesh::curvature::{Curvature, angle_defects, corner_angles};
 use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
 use crate::progress::{Progress, check};
@@ -144,6 +145,11 @@ struct Surface<'a> {
     length: Vec<f64>,
     /// Steiner edge cost: length x visibility x (1 - curvature).
     cost: Vec<f64>,
+    /// Corner angles and angle defects, for the stretch estimate.
+    angles: Vec<[f64; 3]>,
+    defect: Vec<f64>,
+    /// The vertices' elimination order, for every round's estimate.
+    order: VertexOrder,
 }
 
 impl Surface<'_> {
@@ -178,6 +184,15 @@ pub fn choose<T>(
     mut flatten: impl FnMut(&Cut) -> Result<(T, Distortion)>,
 ) -> Result<(Seams, T)> {
     let graph = EdgeGraph::new(topo);
+    let order = VertexOrder::amd(
+        mesh.num_vertices(),
+        (0..graph.num_edges()).map(|e| {
+            let [a, b] = graph.ends(EdgeId::from(e));
+            (a.0, b.0)
+        }),
+    )?;
+    let angles = corner_angles(mesh);
+    let stretch_defect = angle_defects(mesh, topo, &angles);
     let length = graph.lengths(&mesh.positions);
     let curvature = Curvature::compute(mesh, topo);
     // Never-seen edges still cost their length, a little.
@@ -195,6 +210,9 @@ pub fn choose<T>(
         graph,
         length,
         cost,
+        angles,
+        defect: stretch_defect,
+        order,
     };
 
     let mean_edge = s.length.iter().sum::<f64>() / s.length.len().max(1) as f64;
@@ -283,7 +301,7 @@ pub fn choose<T>(
         check(progress)?;
         let cut = cut(mesh, &edges);
         assert_disks(&cut, &mesh.positions)?;
-        let (log_scale, estimate) = estimate_stretch(mesh, &cut)?;
+        let (log_scale, estimate) = estimate_stretch(&s, &edges)?;
         progress.advance(1);
         let last = rounds >= opts.max_rounds;
         // The estimate says when a cut may do; the flattening decides. A
@@ -515,26 +533,26 @@ fn grow(
     finish(s, edges, &all)
 }
 
-/// The log scale factor of the cut surface's least-distortion conformal
-/// flattening (`conformal`), per vertex of the uncut surface (0 on the cut),
-/// and the area_log figure it implies.
-fn estimate_stretch(mesh: &TriMesh, cut: &Cut) -> Result<(Vec<f64>, f64)> {
-    let chart = cut.mesh(&mesh.positions);
-    let chart_topo = Topology::build(&chart)?;
-    let u = conformal::log_scale(&chart, &chart_topo)?;
+/// The log scale factor of the least-distortion conformal flattening of
+/// the surface cut along `edges` (`conformal`), per vertex (0 on the cut
+/// and the boundary), and the area_log figure it implies.
+fn estimate_stretch(s: &Surface, edges: &[EdgeId]) -> Result<(Vec<f64>, f64)> {
+    let mut opened: Vec<bool> = (0..s.mesh.num_vertices())
+        .map(|v| s.topo.is_boundary_vertex(VertexId::from(v)))
+        .collect();
+    for v in edges.iter().flat_map(|&e| s.graph.ends(e)) {
+        opened[v.idx()] = true;
+    }
+    let u = conformal::log_scale_opened(s.mesh, &s.angles, &s.defect, &opened, &s.order)?;
     let mut area_log = 0.0;
     let mut area = 0.0;
-    for (f, l) in conformal::face_log_area_ratios(&chart, &u)
+    for (f, l) in conformal::face_log_area_ratios(s.mesh, &u)
         .iter()
         .enumerate()
     {
-        let a = chart.face_area(f);
+        let a = s.mesh.face_area(f);
         area_log += a * l.abs();
         area += a;
     }
-    let mut per_vertex = vec![0.0; mesh.num_vertices()];
-    for (c, &v) in cut.origin.iter().enumerate() {
-        per_vertex[v as usize] = u[c];
-    }
-    Ok((per_vertex, area_log / area.max(1e-300)))
+    Ok((u, area_log / area.max(1e-300)))
 }

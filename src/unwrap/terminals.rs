@@ -83,7 +83,11 @@ pub fn disc_curvature(
     // A vertex with no sum of its own stays 0: one that borrowed its
     // cell's sum could be chosen where its own is under the threshold.
     let mut strength = vec![0.0; n];
-    for (&v, &sum) in sampled.iter().chain(&refined).zip(sampled_sums.iter().chain(&refined_sums)) {
+    for (&v, &sum) in sampled
+        .iter()
+        .chain(&refined)
+        .zip(sampled_sums.iter().chain(&refined_sums))
+    {
         strength[v] = sum;
     }
     strength

@@ -112,7 +112,7 @@ pub fn visibility_image(u: &Unwrapped, size: usize) -> RgbImage {
             let seen = |p: DVec3| {
                 camera
                     .project(p)
-                    .and_then(|at| buffer.sees(camera, at, |_| false))
+                    .and_then(|at| buffer.sees(at, |d| 0.5 * camera.pixel_size(d), |_| false))
                     == Some(true)
             };
             for &e in &u.seams {

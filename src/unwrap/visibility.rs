@@ -268,10 +268,11 @@ impl DepthBuffer {
     /// depth drawn there (a flat neighbour), or the face drawn there is one
     /// of its own. Comparing faces rather than adding slope-dependent depth
     /// slack keeps points just past a silhouette from counting as seen.
+    /// `slack(depth)` is half a pixel's size at that depth.
     pub(crate) fn sees(
         &self,
-        camera: &dyn Camera,
         at: (DVec2, f64),
+        slack: impl Fn(f64) -> f64,
         own: impl Fn(u32) -> bool,
     ) -> Option<bool> {
         let (px, d) = at;
@@ -283,7 +284,7 @@ impl DepthBuffer {
         }
         let clamp = |x: f64| (x.max(0.0) as usize).min(self.res - 1);
         let i = clamp(px.y) * self.res + clamp(px.x);
-        Some(d <= self.depth[i] as f64 + 0.5 * camera.pixel_size(d) || own(self.face[i]))
+        Some(d <= self.depth[i] as f64 + slack(d) || own(self.face[i]))
     }
 }
 
@@ -406,12 +407,22 @@ pub fn compute(
             let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
             // Back faces of closed pieces are never nearest from outside
             // (`outward_normals`); a perspective camera may be inside one.
+            let (perspective, forward) = (camera.perspective(), camera.forward());
             buffer.draw(camera, mesh, &projected, |f| {
-                camera.perspective() || outward[f].dot(camera.forward()) <= 0.0
+                perspective || outward[f].dot(forward) <= 0.0
             });
+            // Half a pixel, the same at every depth in an orthographic view.
+            let flat = 0.5 * camera.pixel_size(1.0);
+            let slack = |d: f64| {
+                if perspective {
+                    0.5 * camera.pixel_size(d)
+                } else {
+                    flat
+                }
+            };
             for (v, seen) in vertex_seen.iter_mut().enumerate() {
                 if !*seen && let Some(at) = projected[v] {
-                    *seen = buffer.sees(camera, at, |f| vertex_faces(v).contains(&f)) == Some(true);
+                    *seen = buffer.sees(at, slack, |f| vertex_faces(v).contains(&f)) == Some(true);
                 }
             }
             for (e, seen) in edge_seen.iter_mut().enumerate() {
@@ -429,7 +440,7 @@ pub fn compute(
                         .map(|(p, q)| ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0))
                 };
                 if let Some(at) = at {
-                    *seen = buffer.sees(camera, at, |f| edge_sides[e].contains(&f)) == Some(true);
+                    *seen = buffer.sees(at, slack, |f| edge_sides[e].contains(&f)) == Some(true);
                 }
             }
         }

@@ -277,6 +277,11 @@ impl SpdPattern {
         self.n
     }
 
+    /// How many values `factor` takes.
+    pub fn entries(&self) -> usize {
+        self.entries
+    }
+
     /// Factor the matrix whose entries (in the order of the positions given
     /// to `new`, or of the rows given to `from_columns`) are `values`. Fails if it is not positive definite.
     pub fn factor(&self, values: &[f64]) -> Result<Cholesky> {

@@ -44,17 +44,69 @@ pub fn balance(
     max_rounds: usize,
     order: Option<&VertexOrder>,
 ) -> Option<(Vec<DVec2>, usize)> {
+    Balancer::new(chart, order)?.balance(chart, uv, lambda, max_rounds)
+}
+
+/// What balancing needs of a chart before its layout is known (its
+/// triangles in their planes, its Laplacian factored), so that it can be
+/// made while the layout is being computed.
+pub struct Balancer {
+    /// Each triangle in its own plane: corner 0 at the origin, corner 1 on
+    /// the x axis.
+    local: Vec<[DVec2; 3]>,
+    /// The Laplacian over every vertex but one pinned (translation).
+    laplacian: Dirichlet,
+}
+
+impl Balancer {
+    /// `None` when the chart has no faces or its Laplacian cannot be
+    /// factored.
+    pub fn new(chart: &TriMesh, order: Option<&VertexOrder>) -> Option<Balancer> {
+        let faces = &chart.triangles;
+        if faces.is_empty() {
+            return None;
+        }
+        let local = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
+        // On a scan whose obtuse slivers make the Laplacian indefinite,
+        // with Tutte's floor on the weights.
+        let pin = faces[0][0] as usize;
+        let fixed: Vec<bool> = (0..chart.num_vertices()).map(|v| v == pin).collect();
+        let angles = corner_angles(chart);
+        let laplacian = Dirichlet::new(chart, &angles, &fixed, false, order)
+            .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true, order))
+            .ok()?;
+        Some(Balancer { local, laplacian })
+    }
+
+    /// `balance` of the chart this was made for.
+    pub fn balance(
+        &self,
+        chart: &TriMesh,
+        uv: &[DVec2],
+        lambda: f64,
+        max_rounds: usize,
+    ) -> Option<(Vec<DVec2>, usize)> {
+        let Balancer { local, laplacian } = self;
+        balance_rounds(chart, uv, lambda, max_rounds, local, laplacian)
+    }
+}
+
+fn balance_rounds(
+    chart: &TriMesh,
+    uv: &[DVec2],
+    lambda: f64,
+    max_rounds: usize,
+    local: &[[DVec2; 3]],
+    laplacian: &Dirichlet,
+) -> Option<(Vec<DVec2>, usize)> {
     let n = chart.num_vertices();
     let faces = &chart.triangles;
     if faces.is_empty() || lambda <= 0.0 || max_rounds == 0 {
         return None;
     }
-    // Each triangle in its own plane: corner 0 at the origin, corner 1 on
-    // the x axis.
-    let local: Vec<[DVec2; 3]> = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
     // The scale at which uv area equals surface area, so that L_t's
     // "unit scale" is the surface's own.
-    let (area_3d, area_uv) = faces.iter().zip(&local).fold((0.0, 0.0), |(s, u), (t, p)| {
+    let (area_3d, area_uv) = faces.iter().zip(local).fold((0.0, 0.0), |(s, u), (t, p)| {
         (s + double_area(*p) / 2.0, u + face_double_area(t, uv) / 2.0)
     });
     if !(area_uv > 0.0 && area_3d > 0.0) {
@@ -62,16 +114,6 @@ pub fn balance(
     }
     let scale = (area_3d / area_uv).sqrt();
     let mut current: Vec<DVec2> = uv.iter().map(|&u| u * scale).collect();
-
-    // The Laplacian over every vertex but one pinned (translation); on a
-    // scan whose obtuse slivers make it indefinite, with Tutte's floor on
-    // the weights.
-    let pin = faces[0][0] as usize;
-    let fixed: Vec<bool> = (0..n).map(|v| v == pin).collect();
-    let angles = corner_angles(chart);
-    let laplacian = Dirichlet::new(chart, &angles, &fixed, false, order)
-        .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true, order))
-        .ok()?;
 
     // Triangles flipped, degenerate or not a number.
     let bad = |uv: &[DVec2]| {
@@ -88,7 +130,7 @@ pub fn balance(
         // Local: the scaled rotation each triangle should be, and what it
         // asks of each of its edges (faces in parallel, summed in order
         // below, so the sums do not depend on the thread count).
-        let pulls: Vec<[DVec2; 3]> = (faces, &local[..])
+        let pulls: Vec<[DVec2; 3]> = (faces, local)
             .into_par_iter()
             .enumerate()
             .map(|(f, (t, p))| {

@@ -12,9 +12,9 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use super::abf::{self, AbfOptions};
-use super::balance::balance;
+use super::balance::Balancer;
 use super::conformal::boundary_first;
-use super::layout;
+use super::layout::{self, Layout};
 use super::metrics;
 use super::untangle::unfold_layout;
 use crate::error::Result;
@@ -99,16 +99,6 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         let left = unfold_layout(chart, &mut uv);
         (uv, before.saturating_sub(left), left)
     };
-    let balanced = |uv: Vec<DVec2>| {
-        balance(
-            chart,
-            &uv,
-            opts.area_weight,
-            opts.balance_rounds,
-            Some(order),
-        )
-        .unwrap_or((uv, 0))
-    };
     // A stalled ABF++ iterate is scored by its layout's conformality, when
     // that has no flips left after unfolding; the layout of the one kept
     // comes back with it.
@@ -117,20 +107,41 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
             unfold(layout::from_angles(chart, topo, angles, Some(order)).ok()?);
         (left == 0).then(|| (conf_mean(chart, &uv), (uv, unfolded, left)))
     };
-    let solved = abf::solve_until(chart, topo, opts, Some(order), &mut score).and_then(
-        |(solution, laid)| {
-            let laid = match laid {
-                Some(laid) => laid,
-                None => unfold(layout::from_angles(
-                    chart,
-                    topo,
-                    &solution.angles,
-                    Some(order),
-                )?),
-            };
-            Ok((solution, laid))
+    // ABF++'s Newton steps are serial (one factorisation each), and the
+    // layout's system and the balancing's Laplacian do not depend on the
+    // angles: they are made on the other core meanwhile.
+    let balancing = opts.area_weight > 0.0 && opts.balance_rounds > 0;
+    let (solved, (prepared, balancer)) = rayon::join(
+        || abf::solve_until(chart, topo, opts, Some(order), &mut score),
+        || {
+            rayon::join(
+                || Layout::new(chart, topo, Some(order)).ok(),
+                || {
+                    balancing
+                        .then(|| Balancer::new(chart, Some(order)))
+                        .flatten()
+                },
+            )
         },
     );
+    // Where the system could not be made, `from_angles` says why.
+    let lay_out = |angles: &[[f64; 3]]| match &prepared {
+        Some(layout) => layout.solve(chart, angles),
+        None => layout::from_angles(chart, topo, angles, Some(order)),
+    };
+    let balanced = |uv: Vec<DVec2>| {
+        balancer
+            .as_ref()
+            .and_then(|b| b.balance(chart, &uv, opts.area_weight, opts.balance_rounds))
+            .unwrap_or((uv, 0))
+    };
+    let solved = solved.and_then(|(solution, laid)| {
+        let laid = match laid {
+            Some(laid) => laid,
+            None => unfold(lay_out(&solution.angles)?),
+        };
+        Ok((solution, laid))
+    });
     let abf_method = |solution: &abf::AbfSolution, unfolded, balance_rounds| Method::AbfPlusPlus {
         iterations: solution.iterations,
         residual: solution.residual,
@@ -201,12 +212,7 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
         Ok(bff) => (Some(bff), reason),
         Err(e) => (None, format!("{reason}; boundary first flattening: {e}")),
     };
-    let lscm = unfold(layout::from_angles(
-        chart,
-        topo,
-        &corner_angles(chart),
-        Some(order),
-    )?);
+    let lscm = unfold(lay_out(&corner_angles(chart))?);
     Ok(match bff {
         Some((uv, unfolded, left)) if left <= lscm.2 => {
             let (uv, balance_rounds) = balanced(uv);

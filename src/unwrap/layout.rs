@@ -22,75 +22,129 @@ pub fn from_angles(
     angles: &[[f64; 3]],
     order: Option<&VertexOrder>,
 ) -> Result<Vec<DVec2>> {
-    let n = mesh.num_vertices();
-    let (pin_a, pin_b) = pins(mesh, topo);
-    let pinned_uv = |v: usize| {
-        if v == pin_a {
+    Layout::new(mesh, topo, order)?.solve(mesh, angles)
+}
+
+/// A chart's least-squares system with its pins and sparsity, which do not
+/// depend on the angles: made once, while ABF++ finds them.
+pub struct Layout {
+    pin_a: usize,
+    pin_b: usize,
+    /// Unknown pair of every vertex (x at 2k, y at 2k + 1), `u32::MAX` for
+    /// the pins and unreferenced vertices.
+    free: Vec<u32>,
+    pattern: SpdPattern,
+}
+
+impl Layout {
+    pub fn new(mesh: &TriMesh, topo: &Topology, order: Option<&VertexOrder>) -> Result<Layout> {
+        let n = mesh.num_vertices();
+        let (pin_a, pin_b) = pins(mesh, topo);
+        // Free unknowns: x and y of every other referenced vertex.
+        let mut free = vec![u32::MAX; n];
+        let mut count = 0u32;
+        for (v, slot) in free.iter_mut().enumerate() {
+            if v != pin_a && v != pin_b && topo.is_referenced(VertexId::from(v)) {
+                *slot = count;
+                count += 1;
+            }
+        }
+        let unknowns = 2 * count as usize;
+        let mut positions = Vec::with_capacity(mesh.num_faces() * 21);
+        each_entry(mesh, &free, |r, c, _, _| positions.push((r, c)));
+        let pattern = match order {
+            Some(order) => SpdPattern::ordered(unknowns, &positions, &order.unknowns(&free, 2))?,
+            None => SpdPattern::new(unknowns, &positions)?,
+        };
+        Ok(Layout {
+            pin_a,
+            pin_b,
+            free,
+            pattern,
+        })
+    }
+
+    fn pinned_uv(&self, mesh: &TriMesh, v: usize) -> Option<DVec2> {
+        if v == self.pin_a {
             Some(DVec2::ZERO)
-        } else if v == pin_b {
+        } else if v == self.pin_b {
             Some(DVec2::new(
-                (mesh.positions[pin_b] - mesh.positions[pin_a]).length(),
+                (mesh.positions[self.pin_b] - mesh.positions[self.pin_a]).length(),
                 0.0,
             ))
         } else {
             None
         }
-    };
-    // Free unknowns: x and y of every other referenced vertex.
-    let mut free = vec![u32::MAX; n];
-    let mut count = 0u32;
-    for (v, slot) in free.iter_mut().enumerate() {
-        if v != pin_a && v != pin_b && topo.is_referenced(VertexId::from(v)) {
-            *slot = count;
-            count += 1;
-        }
     }
-    let unknowns = 2 * count as usize;
 
-    let mut positions = Vec::with_capacity(mesh.num_faces() * 21);
-    let mut values = Vec::with_capacity(mesh.num_faces() * 21);
-    let mut rhs = vec![0.0; unknowns];
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        let rows = conformality_rows(mesh, f, angles[f]);
-        // Columns: (x, y) of each corner.
-        let column = |k: usize| {
-            let v = t[k / 2] as usize;
-            (free[v] != u32::MAX).then(|| 2 * free[v] + (k % 2) as u32)
-        };
-        for row in &rows {
-            let known: f64 = (0..6)
-                .filter_map(|k| pinned_uv(t[k / 2] as usize).map(|uv| row[k] * uv[k % 2]))
-                .sum();
-            for p in 0..6 {
-                let Some(r) = column(p) else { continue };
-                rhs[r as usize] -= row[p] * known;
-                for q in 0..6 {
-                    if let Some(c) = column(q)
-                        && r >= c
-                    {
-                        positions.push((r, c));
-                        values.push(row[p] * row[q]);
+    /// The chart's uvs for these angles.
+    pub fn solve(&self, mesh: &TriMesh, angles: &[[f64; 3]]) -> Result<Vec<DVec2>> {
+        let rows: Vec<[[f64; 6]; 2]> = (0..mesh.num_faces())
+            .map(|f| conformality_rows(mesh, f, angles[f]))
+            .collect();
+        let mut values = Vec::with_capacity(self.pattern.entries());
+        each_entry(mesh, &self.free, |_, _, f, (p, q)| {
+            let [re, im] = &rows[f];
+            values.push(re[p] * re[q] + im[p] * im[q]);
+        });
+        // The pins' known uvs move to the right-hand side.
+        let mut rhs = vec![0.0; self.pattern.size()];
+        for (t, face_rows) in mesh.triangles.iter().zip(&rows) {
+            for row in face_rows {
+                let known: f64 = (0..6)
+                    .filter_map(|k| {
+                        self.pinned_uv(mesh, t[k / 2] as usize)
+                            .map(|uv| row[k] * uv[k % 2])
+                    })
+                    .sum();
+                for p in 0..6 {
+                    if let Some(r) = column(&self.free, t, p) {
+                        rhs[r as usize] -= row[p] * known;
                     }
                 }
             }
         }
-    }
-    let pattern = match order {
-        Some(order) => SpdPattern::ordered(unknowns, &positions, &order.unknowns(&free, 2))?,
-        None => SpdPattern::new(unknowns, &positions)?,
-    };
-    pattern.factor(&values)?.solve(&mut rhs);
-    Ok((0..n)
-        .map(|v| {
-            pinned_uv(v).unwrap_or_else(|| {
-                if free[v] == u32::MAX {
-                    DVec2::ZERO
-                } else {
-                    DVec2::new(rhs[2 * free[v] as usize], rhs[2 * free[v] as usize + 1])
-                }
+        self.pattern.factor(&values)?.solve(&mut rhs);
+        Ok((0..mesh.num_vertices())
+            .map(|v| {
+                self.pinned_uv(mesh, v)
+                    .unwrap_or_else(|| match self.free[v] {
+                        u32::MAX => DVec2::ZERO,
+                        k => DVec2::new(rhs[2 * k as usize], rhs[2 * k as usize + 1]),
+                    })
             })
-        })
-        .collect())
+            .collect())
+    }
+}
+
+/// Every entry (r, c), r >= c, of the normal matrix each face adds to, in
+/// one order, with the face and its two local columns (x0, y0, x1, y1, x2,
+/// y2); `free` as in `Layout`.
+fn each_entry(
+    mesh: &TriMesh,
+    free: &[u32],
+    mut entry: impl FnMut(u32, u32, usize, (usize, usize)),
+) {
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for p in 0..6 {
+            let Some(r) = column(free, t, p) else {
+                continue;
+            };
+            for q in 0..6 {
+                if let Some(c) = column(free, t, q)
+                    && r >= c
+                {
+                    entry(r, c, f, (p, q));
+                }
+            }
+        }
+    }
+}
+
+/// The unknown of local column `k` of triangle `t`, if it is free.
+fn column(free: &[u32], t: &[u32; 3], k: usize) -> Option<u32> {
+    let v = t[k / 2] as usize;
+    (free[v] != u32::MAX).then(|| 2 * free[v] + (k % 2) as u32)
 }
 
 /// The two real rows (over x0, y0, x1, y1, x2, y2) of face `f`'s

@@ -97,9 +97,9 @@ impl Layout {
                             .map(|uv| row[k] * uv[k % 2])
                     })
                     .sum();
-                for p in 0..6 {
+                for (p, coefficient) in row.iter().enumerate() {
                     if let Some(r) = column(&self.free, t, p) {
-                        rhs[r as usize] -= row[p] * known;
+                        rhs[r as usize] -= coefficient * known;
                     }
                 }
             }

@@ -12,10 +12,11 @@
 //! A `SpdPattern` fixes the sparsity once (ordering and symbolic
 //! factorisation included), so Newton iterations only refill values. The
 //! fill-reducing ordering (AMD) is most of a pattern's cost, and the
-//! systems an unwrap solves all live on one mesh's vertices (the estimate
-//! of each Seamster round, ABF++'s, the layout's, the balancing's): a
-//! `VertexOrder` orders the vertices once and every one of them takes its
-//! unknowns in that order (`SpdPattern::ordered`).
+//! systems an unwrap solves live on a mesh's vertices (the estimate of
+//! every Seamster round on the surface; ABF++'s, the layout's and the
+//! balancing's on its cut chart): a `VertexOrder` orders a mesh's vertices
+//! once and each of its systems takes its unknowns in that order
+//! (`SpdPattern::ordered`).
 //! Factorisation runs single-threaded: a parallel supernodal sum may round
 //! differently with the thread count, and organtex promises the same bytes
 //! on any number of threads; the callers parallelise around it instead.
@@ -96,18 +97,6 @@ impl VertexOrder {
                 .iter()
                 .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]),
         )
-    }
-
-    /// The order of a mesh whose vertex `v` is vertex `origin[v]` of this
-    /// one (a cut of it: the copies of a cut vertex come together).
-    pub fn pulled_back(&self, origin: &[u32]) -> VertexOrder {
-        let mut by_rank: Vec<u32> = (0..origin.len() as u32).collect();
-        by_rank.sort_by_key(|&v| (self.rank[origin[v as usize] as usize], v));
-        let mut rank = vec![0u32; origin.len()];
-        for (k, &v) in by_rank.iter().enumerate() {
-            rank[v as usize] = k as u32;
-        }
-        VertexOrder { rank }
     }
 
     /// The elimination order of a system whose unknowns are
@@ -195,8 +184,15 @@ fn symbolic_cholesky(
     order: Option<&[usize]>,
 ) -> Result<Arc<SymbolicCholesky<usize>>> {
     let n = pattern.nrows();
+    if let Some(fwd) = order
+        && (fwd.len() != n || fwd.iter().any(|&i| i >= n))
+    {
+        return Err(Error::invalid(format!(
+            "sparse pattern: the elimination order is not a permutation of {n} unknowns"
+        )));
+    }
     let inverse = order.map(|fwd| {
-        let mut inv = vec![0usize; n];
+        let mut inv = vec![usize::MAX; n];
         for (k, &i) in fwd.iter().enumerate() {
             inv[i] = k;
         }
@@ -204,7 +200,11 @@ fn symbolic_cholesky(
     });
     let ordering = match (order, &inverse) {
         (Some(fwd), Some(inv)) => {
-            if fwd.len() != n || inv.iter().enumerate().any(|(i, &k)| fwd[k] != i) {
+            if inv
+                .iter()
+                .enumerate()
+                .any(|(i, &k)| k == usize::MAX || fwd[k] != i)
+            {
                 return Err(Error::invalid(format!(
                     "sparse pattern: the elimination order is not a permutation of {n} unknowns"
                 )));
@@ -442,5 +442,8 @@ mod tests {
         twice[1] = twice[0];
         assert!(SpdPattern::ordered(unknowns, &positions, &twice).is_err());
         assert!(SpdPattern::ordered(unknowns, &positions, &elimination[1..]).is_err());
+        let mut beyond = elimination.clone();
+        beyond[0] = unknowns;
+        assert!(SpdPattern::ordered(unknowns, &positions, &beyond).is_err());
     }
 }

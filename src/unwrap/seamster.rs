@@ -31,7 +31,7 @@ use super::steiner::{self, prune_leaves};
 use super::terminals::{disc_curvature, select};
 use crate::error::Result;
 use crate::linalg::VertexOrder;
-use crate::mesh::curvature::{Curvature, angle_defects, corner_angles};
+use crate::mesh::curvature::{angle_defects, corner_angles, dihedral_angles};
 use crate::mesh::graph::{EdgeGraph, ShortestPaths};
 use crate::mesh::{Components, EdgeId, Topology, TriMesh, VertexId};
 use crate::progress::{Progress, check};
@@ -184,25 +184,30 @@ pub fn choose<T>(
     mut flatten: impl FnMut(&Cut) -> Result<(T, Distortion)>,
 ) -> Result<(Seams, T)> {
     let graph = EdgeGraph::new(topo);
-    let order = VertexOrder::amd(
-        mesh.num_vertices(),
-        (0..graph.num_edges()).map(|e| {
-            let [a, b] = graph.ends(EdgeId::from(e));
-            (a.0, b.0)
-        }),
-    )?;
-    let angles = corner_angles(mesh);
-    let stretch_defect = angle_defects(mesh, topo, &angles);
+    // The vertex order (AMD, serial) is made on one core while the other
+    // measures the surface.
+    let (order, (angles, angle_defect, dihedral)) = rayon::join(
+        || {
+            VertexOrder::amd(
+                mesh.num_vertices(),
+                (0..graph.num_edges()).map(|e| {
+                    let [a, b] = graph.ends(EdgeId::from(e));
+                    (a.0, b.0)
+                }),
+            )
+        },
+        || {
+            let angles = corner_angles(mesh);
+            let defect = angle_defects(mesh, topo, &angles);
+            (angles, defect, dihedral_angles(mesh, topo))
+        },
+    );
+    let order = order?;
     let length = graph.lengths(&mesh.positions);
-    let curvature = Curvature::compute(mesh, topo);
     // Never-seen edges still cost their length, a little.
     let hidden = 1.0 / views.max(1) as f64;
     let cost = (0..graph.num_edges())
-        .map(|e| {
-            length[e]
-                * (edge_visibility[e] as f64 + hidden)
-                * (1.0 - curvature.dihedral[e].abs() / PI)
-        })
+        .map(|e| length[e] * (edge_visibility[e] as f64 + hidden) * (1.0 - dihedral[e].abs() / PI))
         .collect();
     let s = Surface {
         mesh,
@@ -211,7 +216,7 @@ pub fn choose<T>(
         length,
         cost,
         angles,
-        defect: stretch_defect,
+        defect: angle_defect.clone(),
         order,
     };
 
@@ -221,7 +226,7 @@ pub fn choose<T>(
     let defect: Vec<f64> = (0..mesh.num_vertices())
         .map(|v| {
             if s.interior(VertexId::from(v)) {
-                curvature.angle_defect[v]
+                angle_defect[v]
             } else {
                 0.0
             }

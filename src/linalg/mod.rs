@@ -231,6 +231,22 @@ impl SpdPattern {
         SpdPattern::with_order(n, positions, Some(order))
     }
 
+    /// The pattern of a system whose unknowns are `block * index[v] + j`
+    /// for a mesh's vertices `v` (`VertexOrder::unknowns`), eliminated in
+    /// `order` of those vertices when one is given, else by AMD.
+    pub fn of_vertices(
+        n: usize,
+        positions: &[(u32, u32)],
+        order: Option<&VertexOrder>,
+        index: &[u32],
+        block: usize,
+    ) -> Result<SpdPattern> {
+        match order {
+            Some(order) => SpdPattern::ordered(n, positions, &order.unknowns(index, block)),
+            None => SpdPattern::new(n, positions),
+        }
+    }
+
     fn with_order(
         n: usize,
         positions: &[(u32, u32)],

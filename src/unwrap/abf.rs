@@ -246,14 +246,13 @@ where
     }
     let pattern = match problem.rows.count {
         0 => None,
-        n => Some(match order {
-            Some(order) => SpdPattern::ordered(
-                2 * n,
-                &positions,
-                &order.unknowns(&problem.rows.of_vertex, 2),
-            )?,
-            None => SpdPattern::new(2 * n, &positions)?,
-        }),
+        n => Some(SpdPattern::of_vertices(
+            2 * n,
+            &positions,
+            order,
+            &problem.rows.of_vertex,
+            2,
+        )?),
     };
 
     let mut state = State {

@@ -87,111 +87,100 @@ impl Balancer {
         max_rounds: usize,
     ) -> Option<(Vec<DVec2>, usize)> {
         let Balancer { local, laplacian } = self;
-        balance_rounds(chart, uv, lambda, max_rounds, local, laplacian)
-    }
-}
+        let n = chart.num_vertices();
+        let faces = &chart.triangles;
+        if lambda <= 0.0 || max_rounds == 0 {
+            return None;
+        }
+        // The scale at which uv area equals surface area, so that L_t's
+        // "unit scale" is the surface's own.
+        let (area_3d, area_uv) = faces.iter().zip(local).fold((0.0, 0.0), |(s, u), (t, p)| {
+            (s + double_area(*p) / 2.0, u + face_double_area(t, uv) / 2.0)
+        });
+        if !(area_uv > 0.0 && area_3d > 0.0) {
+            return None;
+        }
+        let scale = (area_3d / area_uv).sqrt();
+        let mut current: Vec<DVec2> = uv.iter().map(|&u| u * scale).collect();
 
-fn balance_rounds(
-    chart: &TriMesh,
-    uv: &[DVec2],
-    lambda: f64,
-    max_rounds: usize,
-    local: &[[DVec2; 3]],
-    laplacian: &Dirichlet,
-) -> Option<(Vec<DVec2>, usize)> {
-    let n = chart.num_vertices();
-    let faces = &chart.triangles;
-    if faces.is_empty() || lambda <= 0.0 || max_rounds == 0 {
-        return None;
-    }
-    // The scale at which uv area equals surface area, so that L_t's
-    // "unit scale" is the surface's own.
-    let (area_3d, area_uv) = faces.iter().zip(local).fold((0.0, 0.0), |(s, u), (t, p)| {
-        (s + double_area(*p) / 2.0, u + face_double_area(t, uv) / 2.0)
-    });
-    if !(area_uv > 0.0 && area_3d > 0.0) {
-        return None;
-    }
-    let scale = (area_3d / area_uv).sqrt();
-    let mut current: Vec<DVec2> = uv.iter().map(|&u| u * scale).collect();
-
-    // Triangles flipped, degenerate or not a number.
-    let bad = |uv: &[DVec2]| {
-        faces
-            .par_iter()
-            .filter(|t| face_double_area(t, uv).partial_cmp(&0.0) != Some(Ordering::Greater))
-            .count()
-    };
-    // A layout that came with a few flipped slivers may keep them (rounds
-    // often unfold them), never gain any.
-    let mut allowed = bad(&current);
-    let mut rounds = 0;
-    while rounds < max_rounds {
-        // Local: the scaled rotation each triangle should be, and what it
-        // asks of each of its edges (faces in parallel, summed in order
-        // below, so the sums do not depend on the thread count).
-        let pulls: Vec<[DVec2; 3]> = (faces, local)
-            .into_par_iter()
-            .enumerate()
-            .map(|(f, (t, p))| {
-                let l = target(jacobian(p, t.map(|v| current[v as usize])), lambda);
-                std::array::from_fn(|c| {
-                    let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-                    l * (p[a] - p[b]) * laplacian.weight(f, c)
+        // Triangles flipped, degenerate or not a number.
+        let bad = |uv: &[DVec2]| {
+            faces
+                .par_iter()
+                .filter(|t| face_double_area(t, uv).partial_cmp(&0.0) != Some(Ordering::Greater))
+                .count()
+        };
+        // A layout that came with a few flipped slivers may keep them (rounds
+        // often unfold them), never gain any.
+        let mut allowed = bad(&current);
+        let mut rounds = 0;
+        while rounds < max_rounds {
+            // Local: the scaled rotation each triangle should be, and what it
+            // asks of each of its edges (faces in parallel, summed in order
+            // below, so the sums do not depend on the thread count).
+            let pulls: Vec<[DVec2; 3]> = (faces, local)
+                .into_par_iter()
+                .enumerate()
+                .map(|(f, (t, p))| {
+                    let l = target(jacobian(p, t.map(|v| current[v as usize])), lambda);
+                    std::array::from_fn(|c| {
+                        let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                        l * (p[a] - p[b]) * laplacian.weight(f, c)
+                    })
                 })
-            })
-            .collect();
-        // Global: sum over edges (i, j) of w_ij (u_i - u_j - L_t (x_i - x_j))
-        // = 0 at every free vertex.
-        let mut source = [vec![0.0; n], vec![0.0; n]];
-        for (t, pull) in faces.iter().zip(&pulls) {
-            for (c, d) in pull.iter().enumerate() {
-                let (a, b) = ((c + 1) % 3, (c + 2) % 3);
-                for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
-                    source[0][v as usize] += sign * d.x;
-                    source[1][v as usize] += sign * d.y;
+                .collect();
+            // Global: sum over edges (i, j) of w_ij (u_i - u_j - L_t (x_i - x_j))
+            // = 0 at every free vertex.
+            let mut source = [vec![0.0; n], vec![0.0; n]];
+            for (t, pull) in faces.iter().zip(&pulls) {
+                for (c, d) in pull.iter().enumerate() {
+                    let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+                    for (v, sign) in [(t[a], 1.0), (t[b], -1.0)] {
+                        source[0][v as usize] += sign * d.x;
+                        source[1][v as usize] += sign * d.y;
+                    }
                 }
             }
+            let given: [Vec<f64>; 2] = [
+                current.iter().map(|u| u.x).collect(),
+                current.iter().map(|u| u.y).collect(),
+            ];
+            // The two coordinates' solves are independent: one per core.
+            let (x, y) = rayon::join(
+                || laplacian.solve(&given[0], &source[0]),
+                || laplacian.solve(&given[1], &source[1]),
+            );
+            let mut next: Vec<DVec2> = x
+                .into_iter()
+                .zip(y)
+                .map(|(x, y)| DVec2::new(x, y))
+                .collect();
+            let mut folded = bad(&next);
+            if folded > allowed {
+                // A round that evens out a scan's area can fold a few slivers;
+                // unfolding them keeps the round (a 108k-face scanned bust
+                // kept no round without this, 3 with it: area_log 0.336 ->
+                // 0.309).
+                unfold_layout(chart, &mut next);
+                folded = bad(&next);
+            }
+            if folded > allowed {
+                break;
+            }
+            allowed = folded;
+            let moved = next
+                .iter()
+                .zip(&current)
+                .map(|(a, b)| (*a - *b).length())
+                .fold(0.0, f64::max);
+            current = next;
+            rounds += 1;
+            if moved <= 1e-6 * area_3d.sqrt() {
+                break;
+            }
         }
-        let given: [Vec<f64>; 2] = [
-            current.iter().map(|u| u.x).collect(),
-            current.iter().map(|u| u.y).collect(),
-        ];
-        // The two coordinates' solves are independent: one per core.
-        let (x, y) = rayon::join(
-            || laplacian.solve(&given[0], &source[0]),
-            || laplacian.solve(&given[1], &source[1]),
-        );
-        let mut next: Vec<DVec2> = x
-            .into_iter()
-            .zip(y)
-            .map(|(x, y)| DVec2::new(x, y))
-            .collect();
-        let mut folded = bad(&next);
-        if folded > allowed {
-            // A round that evens out a scan's area can fold a few slivers;
-            // unfolding them keeps the round (a 108k-face scanned bust
-            // kept no round without this, 3 with it: area_log 0.336 ->
-            // 0.309).
-            unfold_layout(chart, &mut next);
-            folded = bad(&next);
-        }
-        if folded > allowed {
-            break;
-        }
-        allowed = folded;
-        let moved = next
-            .iter()
-            .zip(&current)
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f64::max);
-        current = next;
-        rounds += 1;
-        if moved <= 1e-6 * area_3d.sqrt() {
-            break;
-        }
+        (rounds > 0).then(|| (current.into_iter().map(|u| u / scale).collect(), rounds))
     }
-    (rounds > 0).then(|| (current.into_iter().map(|u| u / scale).collect(), rounds))
 }
 
 /// A triangle laid out in its plane, corner 0 at the origin and corner 1

@@ -86,12 +86,7 @@ impl Dirichlet {
         let matrix = match count {
             0 => None,
             n => {
-                let pattern = match order {
-                    Some(order) => {
-                        SpdPattern::ordered(n as usize, &positions, &order.unknowns(&index, 1))?
-                    }
-                    None => SpdPattern::new(n as usize, &positions)?,
-                };
+                let pattern = SpdPattern::of_vertices(n as usize, &positions, order, &index, 1)?;
                 Some(pattern.factor(&values)?)
             }
         };

@@ -52,10 +52,7 @@ impl Layout {
         let unknowns = 2 * count as usize;
         let mut positions = Vec::with_capacity(mesh.num_faces() * 21);
         each_entry(mesh, &free, |r, c, _, _| positions.push((r, c)));
-        let pattern = match order {
-            Some(order) => SpdPattern::ordered(unknowns, &positions, &order.unknowns(&free, 2))?,
-            None => SpdPattern::new(unknowns, &positions)?,
-        };
+        let pattern = SpdPattern::of_vertices(unknowns, &positions, order, &free, 2)?;
         Ok(Layout {
             pin_a,
             pin_b,

@@ -145,8 +145,11 @@ struct Surface<'a> {
     length: Vec<f64>,
     /// Steiner edge cost: length x visibility x (1 - curvature).
     cost: Vec<f64>,
-    /// Corner angles and angle defects, for the stretch estimate.
+    /// Corner angles, for the stretch estimate.
     angles: Vec<[f64; 3]>,
+    /// Angle defects of interior vertices (0 on the boundary, which the
+    /// estimate holds fixed): what the curvature discs sum and the
+    /// estimate's source.
     defect: Vec<f64>,
     /// The vertices' elimination order, for every round's estimate.
     order: VertexOrder,
@@ -203,6 +206,16 @@ pub fn choose<T>(
         },
     );
     let order = order?;
+    let defect: Vec<f64> = (0..mesh.num_vertices())
+        .map(|v| {
+            let v = VertexId::from(v);
+            if topo.is_referenced(v) && !topo.is_boundary_vertex(v) {
+                angle_defect[v.idx()]
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let length = graph.lengths(&mesh.positions);
     // Never-seen edges still cost their length, a little.
     let hidden = 1.0 / views.max(1) as f64;
@@ -216,26 +229,17 @@ pub fn choose<T>(
         length,
         cost,
         angles,
-        defect: angle_defect.clone(),
+        defect,
         order,
     };
 
     let mean_edge = s.length.iter().sum::<f64>() / s.length.len().max(1) as f64;
     let radius = (0.05 * mesh.area().sqrt()).max(mean_edge);
     let spacing = 2.0 * radius;
-    let defect: Vec<f64> = (0..mesh.num_vertices())
-        .map(|v| {
-            if s.interior(VertexId::from(v)) {
-                angle_defect[v]
-            } else {
-                0.0
-            }
-        })
-        .collect();
     let cone = disc_curvature(
         &s.graph,
         &mesh.positions,
-        &defect,
+        &s.defect,
         radius,
         opts.cone_threshold,
     );
@@ -258,9 +262,9 @@ pub fn choose<T>(
                 .graph
                 .neighbours(VertexId::from(v))
                 .iter()
-                .map(|(u, _)| defect[u.idx()])
+                .map(|(u, _)| s.defect[u.idx()])
                 .sum();
-            defect[v].abs().min((defect[v] + ring).abs())
+            s.defect[v].abs().min((s.defect[v] + ring).abs())
         })
         .collect();
     let sharp = select(

@@ -308,9 +308,17 @@ pub fn choose<T>(
     let max_tries = opts.max_tries.max(1);
     loop {
         check(progress)?;
-        let cut = cut(mesh, &edges);
-        assert_disks(&cut, &mesh.positions)?;
-        let (log_scale, estimate) = estimate_stretch(&s, &edges)?;
+        // The estimate's solve is serial: the cut is made and checked on
+        // the other core meanwhile.
+        let (estimated, cut) = rayon::join(
+            || estimate_stretch(&s, &edges),
+            || {
+                let cut = cut(mesh, &edges);
+                assert_disks(&cut, &mesh.positions).map(|()| cut)
+            },
+        );
+        let cut = cut?;
+        let (log_scale, estimate) = estimated?;
         progress.advance(1);
         let last = rounds >= opts.max_rounds;
         // The estimate says when a cut may do; the flattening decides. A

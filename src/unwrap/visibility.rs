@@ -398,17 +398,29 @@ pub fn compute(
     let outward = outward_normals(mesh, topo);
     let nv = mesh.num_vertices();
     let ne = topo.num_edges();
-    // One viewpoint: which vertices and edges any of its cameras sees.
-    let render_viewpoint = |cams: &Vec<Box<dyn Camera>>, buffer: &mut DepthBuffer| {
-        let mut vertex_seen = vec![false; nv];
-        let mut edge_seen = vec![false; ne];
+    // One viewpoint: which vertices and edges any of its cameras sees, in
+    // `seen` (reused from view to view, as the buffer is: fresh pages for
+    // every view cost more than drawing it).
+    let render_viewpoint = |cams: &Vec<Box<dyn Camera>>,
+                            buffer: &mut DepthBuffer,
+                            seen: &mut Seen| {
+        let Seen {
+            projected,
+            vertex: vertex_seen,
+            edge: edge_seen,
+        } = seen;
+        vertex_seen.clear();
+        vertex_seen.resize(nv, false);
+        edge_seen.clear();
+        edge_seen.resize(ne, false);
         for camera in cams {
             let camera = camera.as_ref();
-            let projected: Vec<_> = mesh.positions.iter().map(|&p| camera.project(p)).collect();
+            projected.clear();
+            projected.extend(mesh.positions.iter().map(|&p| camera.project(p)));
             // Back faces of closed pieces are never nearest from outside
             // (`outward_normals`); a perspective camera may be inside one.
             let (perspective, forward) = (camera.perspective(), camera.forward());
-            buffer.draw(camera, mesh, &projected, |f| {
+            buffer.draw(camera, mesh, projected, |f| {
                 perspective || outward[f].dot(forward) <= 0.0
             });
             // Half a pixel, the same at every depth in an orthographic view.
@@ -432,7 +444,7 @@ pub fn compute(
                 // Orthographic projection is affine: the midpoint projects to
                 // the mean of its ends.
                 let [a, b] = edge_ends[e];
-                let at = if camera.perspective() {
+                let at = if perspective {
                     camera.project(midpoints[e])
                 } else {
                     projected[a]
@@ -445,20 +457,22 @@ pub fn compute(
             }
         }
         progress.advance(1);
-        (vertex_seen, edge_seen)
     };
     let (vertex_hits, edge_hits) = viewpoint_cameras
         .par_iter()
         .fold(
-            || (vec![0u32; nv], vec![0u32; ne], DepthBuffer::empty()),
-            |(mut vc, mut ec, mut buffer), cams| {
-                let (v, e) = render_viewpoint(cams, &mut buffer);
-                add_hits(&mut vc, &v);
-                add_hits(&mut ec, &e);
-                (vc, ec, buffer)
+            || {
+                let counts = (vec![0u32; nv], vec![0u32; ne]);
+                (counts, DepthBuffer::empty(), Seen::default())
+            },
+            |((mut vc, mut ec), mut buffer, mut seen), cams| {
+                render_viewpoint(cams, &mut buffer, &mut seen);
+                add_hits(&mut vc, &seen.vertex);
+                add_hits(&mut ec, &seen.edge);
+                ((vc, ec), buffer, seen)
             },
         )
-        .map(|(vc, ec, _)| (vc, ec))
+        .map(|(counts, _, _)| counts)
         .reduce(
             || (vec![0u32; nv], vec![0u32; ne]),
             |(mut va, mut ea), (vb, eb)| {
@@ -474,6 +488,15 @@ pub fn compute(
         edge: edge_hits.iter().map(fraction).collect(),
         views,
     }
+}
+
+/// One viewpoint's scratch: its vertices projected by the camera drawn
+/// last, and which vertices and edges its cameras see.
+#[derive(Default)]
+struct Seen {
+    projected: Vec<Option<(DVec2, f64)>>,
+    vertex: Vec<bool>,
+    edge: Vec<bool>,
 }
 
 /// Every face's normal (unnormalised), turned to point out of the volume

@@ -22,6 +22,13 @@ use crate::linalg::VertexOrder;
 use crate::mesh::curvature::corner_angles;
 use crate::mesh::{Topology, TriMesh};
 
+/// ABF++ residuals at or below this are laid out by propagation
+/// (`Layout::propagate`: no factorisation), above it by least squares.
+/// Newton's steps converge quadratically, so a solve that reaches its
+/// tolerance (1e-7) usually lands far below it (the bunny: 3e-10, and its
+/// propagated layout lies within 1e-9 of the least squares').
+const EXACT_RESIDUAL: f64 = 1e-9;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "method", rename_all = "snake_case")]
 pub enum Method {
@@ -136,9 +143,12 @@ pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Fl
             .unwrap_or((uv, 0))
     };
     let solved = solved.and_then(|(solution, laid)| {
-        let laid = match laid {
-            Some(laid) => laid,
-            None => unfold(lay_out(&solution.angles)?),
+        let laid = match (laid, &prepared) {
+            (Some(laid), _) => laid,
+            (None, Some(layout)) if solution.residual <= EXACT_RESIDUAL => {
+                unfold(layout.propagate(chart, topo, &solution.angles))
+            }
+            (None, _) => unfold(lay_out(&solution.angles)?),
         };
         Ok((solution, laid))
     });

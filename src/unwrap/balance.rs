@@ -54,6 +54,9 @@ pub struct Balancer {
     /// Each triangle in its own plane: corner 0 at the origin, corner 1 on
     /// the x axis.
     local: Vec<[DVec2; 3]>,
+    /// The inverse of each local triangle's edge matrix, for its Jacobians
+    /// (the same every round); `None` for a degenerate one.
+    local_inverse: Vec<Option<DMat2>>,
     /// The Laplacian over every vertex but one pinned (translation).
     laplacian: Dirichlet,
 }
@@ -66,7 +69,14 @@ impl Balancer {
         if faces.is_empty() {
             return None;
         }
-        let local = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
+        let local: Vec<[DVec2; 3]> = (0..faces.len()).map(|f| planar(chart.corners(f))).collect();
+        let local_inverse = local
+            .iter()
+            .map(|p| {
+                let from = DMat2::from_cols(p[1] - p[0], p[2] - p[0]);
+                (from.determinant().abs() > 1e-300).then(|| from.inverse())
+            })
+            .collect();
         // On a scan whose obtuse slivers make the Laplacian indefinite,
         // with Tutte's floor on the weights.
         let pin = faces[0][0] as usize;
@@ -75,7 +85,11 @@ impl Balancer {
         let laplacian = Dirichlet::new(chart, &angles, &fixed, false, order)
             .or_else(|_| Dirichlet::new(chart, &angles, &fixed, true, order))
             .ok()?;
-        Some(Balancer { local, laplacian })
+        Some(Balancer {
+            local,
+            local_inverse,
+            laplacian,
+        })
     }
 
     /// `balance` of the chart this was made for.
@@ -86,7 +100,11 @@ impl Balancer {
         lambda: f64,
         max_rounds: usize,
     ) -> Option<(Vec<DVec2>, usize)> {
-        let Balancer { local, laplacian } = self;
+        let Balancer {
+            local,
+            local_inverse,
+            laplacian,
+        } = self;
         let n = chart.num_vertices();
         let faces = &chart.triangles;
         if lambda <= 0.0 || max_rounds == 0 {
@@ -118,11 +136,11 @@ impl Balancer {
             // Local: the scaled rotation each triangle should be, and what it
             // asks of each of its edges (faces in parallel, summed in order
             // below, so the sums do not depend on the thread count).
-            let pulls: Vec<[DVec2; 3]> = (faces, local)
+            let pulls: Vec<[DVec2; 3]> = (faces, (local, local_inverse))
                 .into_par_iter()
                 .enumerate()
-                .map(|(f, (t, p))| {
-                    let l = target(jacobian(p, t.map(|v| current[v as usize])), lambda);
+                .map(|(f, (t, (p, inverse)))| {
+                    let l = target(jacobian(*inverse, t.map(|v| current[v as usize])), lambda);
                     std::array::from_fn(|c| {
                         let (a, b) = ((c + 1) % 3, (c + 2) % 3);
                         l * (p[a] - p[b]) * laplacian.weight(f, c)
@@ -195,14 +213,11 @@ fn planar([p0, p1, p2]: [DVec3; 3]) -> [DVec2; 3] {
     [DVec2::ZERO, DVec2::new(l1, 0.0), DVec2::new(along, across)]
 }
 
-/// The Jacobian of the affine map taking a planar triangle to its uvs.
-fn jacobian(p: &[DVec2; 3], q: [DVec2; 3]) -> DMat2 {
-    let from = DMat2::from_cols(p[1] - p[0], p[2] - p[0]);
+/// The Jacobian of the affine map taking a planar triangle (the inverse
+/// of its edge matrix, `None` when degenerate) to its uvs.
+fn jacobian(local_inverse: Option<DMat2>, q: [DVec2; 3]) -> DMat2 {
     let to = DMat2::from_cols(q[1] - q[0], q[2] - q[0]);
-    if from.determinant().abs() <= 1e-300 {
-        return DMat2::IDENTITY;
-    }
-    to * from.inverse()
+    local_inverse.map_or(DMat2::IDENTITY, |inverse| to * inverse)
 }
 
 /// The local step: the scaled rotation nearest `j` under the hybrid

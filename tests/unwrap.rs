@@ -10,7 +10,7 @@ use organtex::mesh::graph::EdgeGraph;
 use organtex::mesh::shapes::{holed_slab, icosphere, open_cylinder, torus};
 use organtex::mesh::{Components, Topology, TriMesh, io};
 use organtex::progress::Silent;
-use organtex::unwrap::cutgraph::Cut;
+use organtex::unwrap::cutgraph::Opened;
 use organtex::unwrap::intersect::overlapping_pairs;
 use organtex::unwrap::seamster::{self, Distortion, SeamOptions};
 use organtex::unwrap::terminals::{disc_curvature, select};
@@ -150,7 +150,7 @@ fn when_no_cut_meets_the_bounds_the_nearest_try_is_kept() {
     };
     let conf = [1.05, 1.03, f64::NAN, 1.04];
     let mut calls = 0;
-    let flatten = |_: &Cut| {
+    let flatten = |_: &Opened| {
         calls += 1;
         let c = conf[calls - 1];
         if c.is_nan() {

@@ -11,6 +11,7 @@
 //! capped, and yields only its 2g handle loops.
 
 use crate::error::{Error, Result};
+use crate::linalg::VertexOrder;
 use crate::mesh::dsu::DisjointSets;
 use crate::mesh::edges::EdgeTable;
 use crate::mesh::fans::{corner_fans, split_by_fans};
@@ -145,9 +146,12 @@ pub fn cut(mesh: &TriMesh, seams: &[EdgeId]) -> Cut {
 /// Fail unless every connected piece of the cut mesh is a topological disk:
 /// one boundary loop and Euler characteristic 1.
 pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
-    let topo = Topology::build(&cut.mesh(positions))?;
-    let comps = Components::find(&topo);
-    for (i, c) in comps.topology(&topo).iter().enumerate() {
+    check_disks(&Topology::build(&cut.mesh(positions))?)
+}
+
+fn check_disks(topo: &Topology) -> Result<()> {
+    let comps = Components::find(topo);
+    for (i, c) in comps.topology(topo).iter().enumerate() {
         if c.euler != 1 || c.boundary_loops != 1 {
             return Err(Error::invalid(format!(
                 "cutting left chart {i} with {} boundary loops and Euler characteristic {} instead of a disk",
@@ -156,6 +160,32 @@ pub fn assert_disks(cut: &Cut, positions: &[glam::DVec3]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A cut made ready to flatten: its surface, that surface's topology
+/// (checked to be disks) and the order its vertices are eliminated in,
+/// which the flattening's systems share (`flatten::flatten_ordered`).
+pub struct Opened {
+    pub cut: Cut,
+    pub surface: TriMesh,
+    pub topology: Topology,
+    pub order: VertexOrder,
+}
+
+impl Opened {
+    /// Fails as `assert_disks` does.
+    pub fn new(cut: Cut, positions: &[glam::DVec3]) -> Result<Opened> {
+        let surface = cut.mesh(positions);
+        let topology = Topology::build(&surface)?;
+        check_disks(&topology)?;
+        let order = VertexOrder::of_triangles(surface.num_vertices(), &surface.triangles)?;
+        Ok(Opened {
+            cut,
+            surface,
+            topology,
+            order,
+        })
+    }
 }
 
 /// An icosphere cut open along a chain of edges from one pole to the

@@ -98,7 +98,18 @@ pub fn conf_mean(chart: &TriMesh, uv: &[DVec2]) -> f64 {
 /// the vertices gives ABF++'s two unknowns per vertex the fill it finds
 /// on the unknowns themselves.
 pub fn flatten(chart: &TriMesh, topo: &Topology, opts: &AbfOptions) -> Result<Flattened> {
-    let order = &VertexOrder::of_triangles(chart.num_vertices(), &chart.triangles)?;
+    let order = VertexOrder::of_triangles(chart.num_vertices(), &chart.triangles)?;
+    flatten_ordered(chart, topo, &order, opts)
+}
+
+/// `flatten` with the chart's vertices eliminated in `order` (made while
+/// the cut was estimated: `cutgraph::Opened`).
+pub fn flatten_ordered(
+    chart: &TriMesh,
+    topo: &Topology,
+    order: &VertexOrder,
+    opts: &AbfOptions,
+) -> Result<Flattened> {
     // A layout that flipped a few slivers is unfolded vertex by vertex;
     // one without flips then has its area evened out.
     let unfold = |mut uv: Vec<DVec2>| {

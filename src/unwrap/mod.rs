@@ -262,10 +262,10 @@ fn unwrap_piece(
     });
     // Each try of a cut: its charts at mesh scale, and their figures.
     let mut flatten_s = 0.0;
-    let flatten = |cut: &cutgraph::Cut| {
+    let flatten = |opened: &cutgraph::Opened| {
         let t = Instant::now();
-        let cut_surface = cut.mesh(&piece.positions);
-        let charts = overlap::flatten_charts(&cut_surface, &opts.abf, split.as_deref())?;
+        let cut_surface = &opened.surface;
+        let charts = overlap::flatten_charts(opened, &opts.abf, split.as_deref())?;
         let normalised: Vec<(TriMesh, Vec<DVec2>)> = charts
             .iter()
             .map(|c| {

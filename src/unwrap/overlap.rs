@@ -21,7 +21,8 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::abf::AbfOptions;
-use super::flatten::{Method, flatten};
+use super::cutgraph::Opened;
+use super::flatten::{Flattened, Method, flatten, flatten_ordered};
 use super::intersect::overlapping_pairs;
 use crate::error::Result;
 use crate::mesh::dsu::DisjointSets;
@@ -51,14 +52,17 @@ const MAX_ROUNDS: usize = 4;
 /// into the atlas), split it where its flattening overlaps itself between
 /// drawn faces. Uvs come back in raw flattening units (callers normalise).
 pub fn flatten_charts(
-    chart: &TriMesh,
+    opened: &Opened,
     abf: &AbfOptions,
     split: Option<&[bool]>,
 ) -> Result<Vec<FlatChart>> {
-    match split {
-        Some(drawn) => flatten_part(chart, abf, drawn, MAX_ROUNDS),
-        None => flatten_part(chart, abf, &[], 0),
-    }
+    let (drawn, rounds) = match split {
+        Some(drawn) => (drawn, MAX_ROUNDS),
+        None => (&[][..], 0),
+    };
+    let chart = &opened.surface;
+    let flat = flatten_ordered(chart, &opened.topology, &opened.order, abf)?;
+    split_overlaps(chart, &opened.topology, flat, abf, drawn, rounds)
 }
 
 fn flatten_part(
@@ -69,6 +73,19 @@ fn flatten_part(
 ) -> Result<Vec<FlatChart>> {
     let topo = Topology::build(chart)?;
     let flat = flatten(chart, &topo, abf)?;
+    split_overlaps(chart, &topo, flat, abf, drawn, rounds)
+}
+
+/// `flat`, `chart`'s flattening, as it is, or split as `flatten_charts`
+/// says.
+fn split_overlaps(
+    chart: &TriMesh,
+    topo: &Topology,
+    flat: Flattened,
+    abf: &AbfOptions,
+    drawn: &[bool],
+    rounds: usize,
+) -> Result<Vec<FlatChart>> {
     let whole = || {
         vec![FlatChart {
             faces: (0..chart.num_faces() as u32).collect(),
@@ -87,18 +104,18 @@ fn flatten_part(
         return Ok(whole());
     }
     if rounds == 0 {
-        return Ok(peel(chart, &topo, &flat.uv, &flat.method, &pairs));
+        return Ok(peel(chart, topo, &flat.uv, &flat.method, &pairs));
     }
     // One flap per pair of overlapping patches not already inside a flap,
     // flaps apart from each other: the rest is flattened again once for all
     // of them.
     let mut in_flap = vec![false; chart.num_faces()];
     let mut flaps: Vec<Vec<FaceId>> = Vec::new();
-    for [f, g] in one_pair_per_patch_pair(&topo, &pairs) {
+    for [f, g] in one_pair_per_patch_pair(topo, &pairs) {
         if in_flap[f as usize] || in_flap[g as usize] {
             continue;
         }
-        let flap = flap(chart, &topo, [f as usize, g as usize]);
+        let flap = flap(chart, topo, [f as usize, g as usize]);
         if flap.iter().any(|h| in_flap[h.idx()])
             || flap.len() * 2 > chart.num_faces() + 1 && !flaps.is_empty()
         {
@@ -118,7 +135,7 @@ fn flatten_part(
         match disks(chart, &faces) {
             Some(d) => parts.extend(d),
             // Cutting here would not leave disks.
-            None => return Ok(peel(chart, &topo, &flat.uv, &flat.method, &pairs)),
+            None => return Ok(peel(chart, topo, &flat.uv, &flat.method, &pairs)),
         }
     }
     // The parts flatten independently; collected in order, so the result

@@ -26,7 +26,7 @@
 use std::f64::consts::PI;
 
 use super::conformal;
-use super::cutgraph::{Cut, assert_disks, connect_pieces, cut, handle_loops};
+use super::cutgraph::{Cut, Opened, connect_pieces, cut, handle_loops};
 use super::steiner::{self, prune_leaves};
 use super::terminals::{disc_curvature, select};
 use crate::error::Result;
@@ -184,7 +184,7 @@ pub fn choose<T>(
     views: usize,
     opts: &SeamOptions,
     progress: &dyn Progress,
-    mut flatten: impl FnMut(&Cut) -> Result<(T, Distortion)>,
+    mut flatten: impl FnMut(&Opened) -> Result<(T, Distortion)>,
 ) -> Result<(Seams, T)> {
     let graph = EdgeGraph::new(topo);
     // The vertex order (AMD, serial) is made on one core while the other
@@ -308,16 +308,14 @@ pub fn choose<T>(
     let max_tries = opts.max_tries.max(1);
     loop {
         check(progress)?;
-        // The estimate's solve is serial: the cut is made and checked on
-        // the other core meanwhile.
-        let (estimated, cut) = rayon::join(
+        // The estimate's solve is serial: the cut is made, checked and
+        // ordered for flattening on the other core meanwhile (whether or
+        // not the estimate then asks for the flattening).
+        let (estimated, opened) = rayon::join(
             || estimate_stretch(&s, &edges),
-            || {
-                let cut = cut(mesh, &edges);
-                assert_disks(&cut, &mesh.positions).map(|()| cut)
-            },
+            || Opened::new(cut(mesh, &edges), &mesh.positions),
         );
-        let cut = cut?;
+        let opened = opened?;
         let (log_scale, estimate) = estimated?;
         progress.advance(1);
         let last = rounds >= opts.max_rounds;
@@ -326,9 +324,9 @@ pub fn choose<T>(
         // tries are left: a later cut may flatten.
         let mut met = false;
         if estimate <= opts.max_stretch || last {
-            let flat = flatten(&cut);
+            let flat = flatten(&opened);
             let out_of_tries = tried.list.len() + 1 >= max_tries;
-            match tried.record(flat, opts, rounds, &edges, &terminals, &cut) {
+            match tried.record(flat, opts, rounds, &edges, &terminals, &opened.cut) {
                 Ok(m) => met = m,
                 Err(e) if (last || out_of_tries) && tried.kept.is_none() => return Err(e),
                 Err(_) => {}
@@ -350,7 +348,8 @@ pub fn choose<T>(
         if added.is_empty() {
             if tried.kept.is_none() {
                 // No terminal far enough to add before any cut flattened.
-                tried.record(flatten(&cut), opts, rounds, &edges, &terminals, &cut)?;
+                let flat = flatten(&opened);
+                tried.record(flat, opts, rounds, &edges, &terminals, &opened.cut)?;
             }
             let (mut seams, flattened, _) = tried.kept.expect("a flattening was kept");
             seams.tries = tried.list;

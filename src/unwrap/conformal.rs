@@ -63,14 +63,7 @@ impl Dirichlet {
                 count += 1;
             }
         }
-        let mut edges = Vec::with_capacity(chart.num_faces() * 3);
-        for (t, a) in chart.triangles.iter().zip(angles) {
-            for i in 0..3 {
-                let w = 0.5 * a[i].cos() / a[i].sin().max(1e-12);
-                let w = if positive { w.max(MIN_WEIGHT) } else { w };
-                edges.push((t[(i + 1) % 3], t[(i + 2) % 3], w));
-            }
-        }
+        let edges = cotangent_edges(chart, angles, positive);
         // L = minus the Laplacian, integrated, over the free vertices.
         let mut positions = Vec::with_capacity(edges.len() * 3);
         let mut values = Vec::with_capacity(edges.len() * 3);
@@ -160,22 +153,113 @@ pub fn log_scale(chart: &TriMesh, topo: &Topology) -> Result<Vec<f64>> {
     Ok(LogScale::solve(chart, topo)?.u)
 }
 
-/// `log_scale` of the surface cut open through the `opened` vertices
-/// (its boundary and its cut's), solved on the uncut surface: a vertex
-/// off the cut has the same neighbours, weights and defect in both, and
-/// every copy of a cut vertex is held at 0, so the cut surface need not
-/// be built, and one vertex order serves every cut. `angles` and `defect`
-/// are the surface's (`corner_angles`, `angle_defects`).
-pub fn log_scale_opened(
-    surface: &TriMesh,
-    angles: &[[f64; 3]],
-    defect: &[f64],
-    opened: &[bool],
-    order: &VertexOrder,
-) -> Result<Vec<f64>> {
-    let dirichlet = Dirichlet::new(surface, angles, opened, false, Some(order))?;
-    let source: Vec<f64> = defect.iter().map(|d| -d).collect();
-    Ok(dirichlet.solve(&vec![0.0; surface.num_vertices()], &source))
+/// `log_scale` of the surface cut open through given vertices (its
+/// boundary and its cut's), solved on the uncut surface: a vertex off the
+/// cut has the same neighbours, weights and defect in both, and every copy
+/// of a cut vertex is held at 0, so the cut surface need not be built.
+/// Every referenced vertex is an unknown, the held ones' rows and columns
+/// those of the identity (their value 0, exactly: the factor's entries in
+/// them stay 0), so one pattern and one symbolic factorisation serve
+/// every cut Seamster tries, each only refactored.
+pub struct OpenedLogScale {
+    /// Unknown of each referenced vertex, `u32::MAX` for the others.
+    index: Vec<u32>,
+    /// Every edge once per face with its half-cotangent weight.
+    edges: Vec<(u32, u32, f64)>,
+    /// -(angle defect) of each vertex.
+    source: Vec<f64>,
+    pattern: Option<SpdPattern>,
+}
+
+impl OpenedLogScale {
+    /// `angles` and `defect` are the surface's (`corner_angles`,
+    /// `angle_defects`); `order` orders its vertices.
+    pub fn new(
+        surface: &TriMesh,
+        angles: &[[f64; 3]],
+        defect: &[f64],
+        order: &VertexOrder,
+    ) -> Result<OpenedLogScale> {
+        let mut index = vec![u32::MAX; surface.num_vertices()];
+        let mut count = 0u32;
+        for &v in surface.triangles.iter().flatten() {
+            index[v as usize] = 0;
+        }
+        for slot in index.iter_mut().filter(|i| **i == 0) {
+            *slot = count;
+            count += 1;
+        }
+        let edges = cotangent_edges(surface, angles, false);
+        // Per edge its two diagonal entries and its off-diagonal one, then
+        // one more diagonal entry per vertex (1 where it is held).
+        let mut positions = Vec::with_capacity(edges.len() * 3 + count as usize);
+        for &(a, b, _) in &edges {
+            let (p, q) = (index[a as usize], index[b as usize]);
+            positions.extend([(p, p), (q, q), (p.max(q), p.min(q))]);
+        }
+        positions.extend((0..count).map(|k| (k, k)));
+        let pattern = match count {
+            0 => None,
+            n => Some(SpdPattern::of_vertices(
+                n as usize,
+                &positions,
+                Some(order),
+                &index,
+                1,
+            )?),
+        };
+        Ok(OpenedLogScale {
+            index,
+            edges,
+            source: defect.iter().map(|d| -d).collect(),
+            pattern,
+        })
+    }
+
+    /// The log scale of the surface opened through the `opened` vertices.
+    pub fn solve(&self, opened: &[bool]) -> Result<Vec<f64>> {
+        let Some(pattern) = &self.pattern else {
+            return Ok(vec![0.0; self.index.len()]);
+        };
+        let free = |v: u32| !opened[v as usize];
+        let mut values = Vec::with_capacity(pattern.entries());
+        for &(a, b, w) in &self.edges {
+            let (fa, fb) = (free(a), free(b));
+            values.extend([
+                if fa { w } else { 0.0 },
+                if fb { w } else { 0.0 },
+                if fa && fb { -w } else { 0.0 },
+            ]);
+        }
+        let mut rhs = Vec::with_capacity(pattern.size());
+        for (v, &k) in self.index.iter().enumerate() {
+            if k != u32::MAX {
+                let held = opened[v];
+                values.push(if held { 1.0 } else { 0.0 });
+                rhs.push(if held { 0.0 } else { self.source[v] });
+            }
+        }
+        pattern.factor(&values)?.solve(&mut rhs);
+        Ok(self
+            .index
+            .iter()
+            .map(|&k| if k == u32::MAX { 0.0 } else { rhs[k as usize] })
+            .collect())
+    }
+}
+
+/// Every edge of `mesh` once per face, with the half cotangent of the
+/// corner opposite it (floored as `Dirichlet::new` says with `positive`).
+fn cotangent_edges(mesh: &TriMesh, angles: &[[f64; 3]], positive: bool) -> Vec<(u32, u32, f64)> {
+    let mut edges = Vec::with_capacity(mesh.num_faces() * 3);
+    for (t, a) in mesh.triangles.iter().zip(angles) {
+        for i in 0..3 {
+            let w = 0.5 * a[i].cos() / a[i].sin().max(1e-12);
+            let w = if positive { w.max(MIN_WEIGHT) } else { w };
+            edges.push((t[(i + 1) % 3], t[(i + 2) % 3], w));
+        }
+    }
+    edges
 }
 
 /// The log scale factor and what it was solved from.
@@ -317,7 +401,61 @@ pub fn boundary_first(chart: &TriMesh, topo: &Topology) -> Result<Vec<DVec2>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::graph::{EdgeGraph, ShortestPaths};
     use crate::unwrap::metrics::face_double_area;
+
+    /// One pattern serves every cut: opened through a pole-to-pole seam,
+    /// and then through a longer one, the log scale solved on the uncut
+    /// sphere is the cut chart's own (`log_scale`) at every copy of every
+    /// vertex.
+    #[test]
+    fn the_opened_log_scale_is_the_cut_charts() {
+        let sphere = crate::mesh::shapes::icosphere(3);
+        let topo = Topology::build(&sphere).unwrap();
+        let angles = corner_angles(&sphere);
+        let defect = angle_defects(&sphere, &topo, &angles);
+        let order = VertexOrder::of_triangles(sphere.num_vertices(), &sphere.triangles).unwrap();
+        let opened_scale = OpenedLogScale::new(&sphere, &angles, &defect, &order).unwrap();
+        let graph = EdgeGraph::new(&topo);
+        let paths = ShortestPaths::from_sources(
+            &graph,
+            &graph.lengths(&sphere.positions),
+            &[(VertexId(0), 0)],
+        );
+        let far = |k: usize| {
+            let mut by_distance: Vec<usize> = (0..sphere.num_vertices()).collect();
+            by_distance.sort_by(|&a, &b| paths.distance[b].total_cmp(&paths.distance[a]));
+            VertexId::from(by_distance[k])
+        };
+        let short = paths.path_to_source(&graph, far(40));
+        let mut long = paths.path_to_source(&graph, far(0));
+        long.extend(paths.path_to_source(&graph, far(60)));
+        long.sort_unstable();
+        long.dedup();
+        for seams in [short, long] {
+            let cut = crate::unwrap::cutgraph::cut(&sphere, &seams);
+            let chart = cut.mesh(&sphere.positions);
+            let chart_topo = Topology::build(&chart).unwrap();
+            let expected = log_scale(&chart, &chart_topo).unwrap();
+            let mut opened = vec![false; sphere.num_vertices()];
+            for v in seams.iter().flat_map(|&e| graph.ends(e)) {
+                opened[v.idx()] = true;
+            }
+            let u = opened_scale.solve(&opened).unwrap();
+            for (v, &o) in cut.origin.iter().enumerate() {
+                assert!(
+                    (u[o as usize] - expected[v]).abs() < 1e-9,
+                    "{} against {}",
+                    u[o as usize],
+                    expected[v]
+                );
+            }
+            assert!(
+                expected.iter().any(|x| x.abs() > 0.1),
+                "a cut sphere stretches"
+            );
+        }
+    }
 
     #[test]
     fn boundary_first_lays_out_the_estimated_map_without_flips() {

@@ -25,7 +25,7 @@
 
 use std::f64::consts::PI;
 
-use super::conformal;
+use super::conformal::{self, OpenedLogScale};
 use super::cutgraph::{Cut, Opened, connect_pieces, cut, handle_loops};
 use super::steiner::{self, prune_leaves};
 use super::terminals::{disc_curvature, select};
@@ -145,14 +145,13 @@ struct Surface<'a> {
     length: Vec<f64>,
     /// Steiner edge cost: length x visibility x (1 - curvature).
     cost: Vec<f64>,
-    /// Corner angles, for the stretch estimate.
-    angles: Vec<[f64; 3]>,
     /// Angle defects of interior vertices (0 on the boundary, which the
     /// estimate holds fixed): what the curvature discs sum and the
     /// estimate's source.
     defect: Vec<f64>,
-    /// The vertices' elimination order, for every round's estimate.
-    order: VertexOrder,
+    /// Every round's estimate: the surface's log scale opened through
+    /// the cut.
+    log_scale: OpenedLogScale,
 }
 
 impl Surface<'_> {
@@ -222,27 +221,32 @@ pub fn choose<T>(
     let cost = (0..graph.num_edges())
         .map(|e| length[e] * (edge_visibility[e] as f64 + hidden) * (1.0 - dihedral[e].abs() / PI))
         .collect();
+    let mean_edge = length.iter().sum::<f64>() / length.len().max(1) as f64;
+    let radius = (0.05 * mesh.area().sqrt()).max(mean_edge);
+    let spacing = 2.0 * radius;
+    // The estimate's symbolic factorisation (serial) is made while the
+    // discs are summed.
+    let (cone, log_scale) = rayon::join(
+        || {
+            disc_curvature(
+                &graph,
+                &mesh.positions,
+                &defect,
+                radius,
+                opts.cone_threshold,
+            )
+        },
+        || OpenedLogScale::new(mesh, &angles, &defect, &order),
+    );
     let s = Surface {
         mesh,
         topo,
         graph,
         length,
         cost,
-        angles,
         defect,
-        order,
+        log_scale: log_scale?,
     };
-
-    let mean_edge = s.length.iter().sum::<f64>() / s.length.len().max(1) as f64;
-    let radius = (0.05 * mesh.area().sqrt()).max(mean_edge);
-    let spacing = 2.0 * radius;
-    let cone = disc_curvature(
-        &s.graph,
-        &mesh.positions,
-        &s.defect,
-        radius,
-        opts.cone_threshold,
-    );
     let interior = |v: VertexId| s.interior(v);
     let mut terminals = select(
         &s.graph,
@@ -559,7 +563,7 @@ fn estimate_stretch(s: &Surface, edges: &[EdgeId]) -> Result<(Vec<f64>, f64)> {
     for v in edges.iter().flat_map(|&e| s.graph.ends(e)) {
         opened[v.idx()] = true;
     }
-    let u = conformal::log_scale_opened(s.mesh, &s.angles, &s.defect, &opened, &s.order)?;
+    let u = s.log_scale.solve(&opened)?;
     let mut area_log = 0.0;
     let mut area = 0.0;
     for (f, l) in conformal::face_log_area_ratios(s.mesh, &u)

@@ -3,9 +3,8 @@
 //! shares a cell. Measuring a layout (`metrics`) and splitting charts that
 //! fold over themselves (`overlap`) both ask it, so it sits below both.
 
-use std::collections::HashMap;
-
 use glam::DVec2;
+use rayon::prelude::*;
 
 /// Pairs of triangles (lower index first, sorted) whose uv triangles
 /// overlap with positive area. Triangles sharing a uv corner are never
@@ -34,7 +33,11 @@ pub fn overlapping_pairs(triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<[u32; 2]> 
     // meets a few cells, each cell a few triangles.
     let cell = (extent / triangles.len() as f64).max(span / 4096.0);
     let index = |p: DVec2| (((p - lo) / cell).floor()).as_ivec2();
-    let mut cells: HashMap<(i32, i32), Vec<u32>> = HashMap::new();
+    // (cell, face) for every cell a face's box touches, sorted: each cell's
+    // faces are then a run, in face order. Its pairs are checked cell by
+    // cell in parallel; the sort below makes the result independent of the
+    // thread count.
+    let mut entries: Vec<((i32, i32), u32)> = Vec::with_capacity(4 * triangles.len());
     for (f, t) in triangles.iter().enumerate() {
         let p = corners(t);
         let (a, b) = (
@@ -43,27 +46,38 @@ pub fn overlapping_pairs(triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<[u32; 2]> 
         );
         for y in a.y..=b.y {
             for x in a.x..=b.x {
-                cells.entry((x, y)).or_default().push(f as u32);
+                entries.push(((x, y), f as u32));
             }
         }
     }
-    let mut keys: Vec<_> = cells.keys().copied().collect();
-    keys.sort_unstable();
-    let mut pairs = Vec::new();
-    for key in keys {
-        let list = &cells[&key];
-        for (i, &f) in list.iter().enumerate() {
-            for &g in &list[i + 1..] {
-                let (tf, tg) = (triangles[f as usize], triangles[g as usize]);
-                if tf.iter().any(|c| tg.contains(c)) {
-                    continue;
-                }
-                if triangles_overlap(corners(&tf), corners(&tg), eps) {
-                    pairs.push([f.min(g), f.max(g)]);
-                }
-            }
+    entries.par_sort_unstable();
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for k in 1..=entries.len() {
+        if k == entries.len() || entries[k].0 != entries[start].0 {
+            runs.push(start..k);
+            start = k;
         }
     }
+    let mut pairs: Vec<[u32; 2]> = runs
+        .into_par_iter()
+        .flat_map_iter(|run| {
+            let list = &entries[run];
+            let mut found = Vec::new();
+            for (i, &(_, f)) in list.iter().enumerate() {
+                for &(_, g) in &list[i + 1..] {
+                    let (tf, tg) = (triangles[f as usize], triangles[g as usize]);
+                    if tf.iter().any(|c| tg.contains(c)) {
+                        continue;
+                    }
+                    if triangles_overlap(corners(&tf), corners(&tg), eps) {
+                        found.push([f.min(g), f.max(g)]);
+                    }
+                }
+            }
+            found
+        })
+        .collect();
     pairs.sort_unstable();
     pairs.dedup();
     pairs

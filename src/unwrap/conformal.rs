@@ -32,6 +32,11 @@ pub struct Dirichlet {
     index: Vec<u32>,
     /// Every edge once per face with its half-cotangent weight.
     edges: Vec<(u32, u32, f64)>,
+    /// The edges between a free vertex and a fixed one, as (the free one's
+    /// row, the fixed vertex, weight), in `edges`' order: what moves given
+    /// values to the right-hand side (a pinned chart has a handful; every
+    /// solve used to look through all the edges for them).
+    couplings: Vec<(u32, u32, f64)>,
     matrix: Option<Cholesky>,
 }
 
@@ -83,9 +88,19 @@ impl Dirichlet {
                 Some(pattern.factor(&values)?)
             }
         };
+        let mut couplings = Vec::new();
+        for &(a, b, w) in &edges {
+            for (free, known) in [(a, b), (b, a)] {
+                let k = index[free as usize];
+                if k != u32::MAX && index[known as usize] == u32::MAX {
+                    couplings.push((k, known, w));
+                }
+            }
+        }
         Ok(Dirichlet {
             index,
             edges,
+            couplings,
             matrix,
         })
     }
@@ -116,13 +131,8 @@ impl Dirichlet {
             .map(|v| source[v])
             .collect();
         // Known boundary values move to the right-hand side.
-        for &(a, b, w) in &self.edges {
-            for (free, known) in [(a, b), (b, a)] {
-                let k = self.index[free as usize];
-                if k != u32::MAX && self.index[known as usize] == u32::MAX {
-                    rhs[k as usize] += w * given[known as usize];
-                }
-            }
+        for &(k, known, w) in &self.couplings {
+            rhs[k as usize] += w * given[known as usize];
         }
         if let Some(m) = &self.matrix {
             m.solve(&mut rhs);

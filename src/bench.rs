@@ -112,7 +112,7 @@ pub fn workloads() -> Vec<Workload> {
         Workload {
             name: "unwrap bunny",
             min_runs: 1,
-            what: "visibility, seams, ABF++ and layout, one chart (target: 1/4 of xatlas)",
+            what: "visibility, seams, ABF++ and layout, one chart (target: 1/10 of xatlas)",
             prepare: |root| {
                 let mesh = io::read(&bunny(root))?;
                 Ok(Box::new(move || {

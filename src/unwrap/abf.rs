@@ -81,6 +81,7 @@ pub struct AbfSolution {
 
 /// Constraint rows of a vertex: planarity at 2k, wheel at 2k + 1, for the
 /// k-th interior vertex.
+#[derive(Clone)]
 struct Rows {
     of_vertex: Vec<u32>,
     count: usize,
@@ -198,161 +199,186 @@ pub fn solve_until<T, F>(
 where
     F: FnMut(&[[f64; 3]]) -> Option<(f64, T)>,
 {
-    let tris = &mesh.triangles;
-    let rows = Rows::new(topo);
-    let theta = corner_angles(mesh);
+    Prepared::new(mesh, topo, order)?.solve_until(opts, score)
+}
 
-    // Target angles: interior vertices' angles scaled to sum to 2 pi.
-    let mut sum_at = vec![0.0; mesh.num_vertices()];
-    for (t, a) in tris.iter().zip(&theta) {
-        for i in 0..3 {
-            sum_at[t[i] as usize] += a[i];
-        }
-    }
-    let beta: Vec<[f64; 3]> = tris
-        .iter()
-        .zip(&theta)
-        .map(|(t, a)| {
-            std::array::from_fn(|i| {
-                let v = t[i] as usize;
-                let scaled = if rows.of_vertex[v] != NOT_INTERIOR && sum_at[v] > 0.0 {
-                    a[i] * TAU / sum_at[v]
-                } else {
-                    a[i]
+/// An ABF++ problem ready for its Newton steps: the target angles and
+/// weights, the reduced system's symbolic factorisation, the starting
+/// state and its residuals. Made on both cores: the sparsity and its
+/// symbolic factorisation on one, the angles and the first residuals on
+/// the other.
+pub struct Prepared<'a> {
+    problem: Problem<'a>,
+    positions: usize,
+    pattern: Option<SpdPattern>,
+    state: State,
+    residuals: Residuals,
+}
+
+impl<'a> Prepared<'a> {
+    /// `order`, when given, orders the mesh's vertices for the reduced
+    /// system's factorisation.
+    pub fn new(
+        mesh: &'a TriMesh,
+        topo: &Topology,
+        order: Option<&VertexOrder>,
+    ) -> Result<Prepared<'a>> {
+        let tris = &mesh.triangles;
+        let rows = Rows::new(topo);
+        let (pattern, (problem, state, residuals)) = rayon::join(
+            || {
+                // Sparsity of the reduced system: per face, the pairs of
+                // its slots.
+                let mut positions = Vec::with_capacity(tris.len() * 21);
+                for t in tris {
+                    let s = rows.slots(t);
+                    for p in s.iter().flatten() {
+                        for q in s.iter().flatten() {
+                            if p >= q {
+                                positions.push((*p, *q));
+                            }
+                        }
+                    }
+                }
+                let pattern = match rows.count {
+                    0 => None,
+                    n => Some(SpdPattern::of_vertices(
+                        2 * n,
+                        &positions,
+                        order,
+                        &rows.of_vertex,
+                        2,
+                    )?),
                 };
-                scaled.clamp(MIN_ANGLE, MAX_ANGLE)
-            })
+                Ok::<_, Error>((positions.len(), pattern))
+            },
+            || {
+                let problem = Problem::new(mesh, rows.clone());
+                let state = State {
+                    alpha: problem.beta.clone(),
+                    lambda_tri: vec![0.0; tris.len()],
+                    lambda: vec![0.0; 2 * problem.rows.count],
+                };
+                let residuals = problem.residuals(&state);
+                (problem, state, residuals)
+            },
+        );
+        let (positions, pattern) = pattern?;
+        Ok(Prepared {
+            problem,
+            positions,
+            pattern,
+            state,
+            residuals,
         })
-        .collect();
-    let weight = beta.iter().map(|b| b.map(|x| 1.0 / (x * x))).collect();
-    let problem = Problem {
-        tris,
-        rows,
-        weight,
-        beta,
-    };
+    }
 
-    // Sparsity of the reduced system: per face, the pairs of its slots.
-    let mut positions = Vec::with_capacity(tris.len() * 21);
-    for t in tris {
-        let s = problem.rows.slots(t);
-        for p in s.iter().flatten() {
-            for q in s.iter().flatten() {
-                if p >= q {
-                    positions.push((*p, *q));
+    /// `solve_until` from here.
+    pub fn solve_until<T, F>(
+        self,
+        opts: &AbfOptions,
+        score: &mut F,
+    ) -> Result<(AbfSolution, Option<T>)>
+    where
+        F: FnMut(&[[f64; 3]]) -> Option<(f64, T)>,
+    {
+        let Prepared {
+            problem,
+            positions,
+            pattern,
+            mut state,
+            mut residuals,
+        } = self;
+        let mut residual = residual_norm(&problem.weight, &residuals);
+        let mut iterations = 0;
+        let mut values = vec![0.0; positions];
+        // The iterate with the smallest residual: on a raw scan the residual
+        // can creep down linearly and rise again (a 108k-face scanned bust:
+        // 0.19 after 65 steps, 0.10 after 100), and the least-squares layout
+        // of such angles is still far more conformal than a fallback's.
+        let mut best = (residual, state.alpha.clone());
+        // Best residual after each step, the step of the last stall, and the
+        // best-scored iterate (score, residual, angles, layout).
+        let mut best_after = vec![residual];
+        let mut stalled_at = 0;
+        let mut kept: Option<(f64, f64, Vec<[f64; 3]>, T)> = None;
+        while residual > opts.tolerance {
+            let capped = iterations == opts.max_iterations;
+            let stalled = iterations >= stalled_at + STALL_WINDOW
+                && best.0 > 0.5 * best_after[iterations - STALL_WINDOW];
+            if stalled || (capped && kept.is_some()) {
+                stalled_at = iterations;
+                let previous = kept.as_ref().map(|k| k.0);
+                if let Some((now, laid)) = score(&best.1)
+                    && previous.is_none_or(|p| now < p)
+                {
+                    kept = Some((now, best.0, best.1.clone(), laid));
+                }
+                // Ends when the layout no longer improves by more than SETTLED
+                // (an unusable one is no improvement), or at the cap.
+                let settled =
+                    previous.is_some_and(|p| kept.as_ref().is_some_and(|k| k.0 >= p - SETTLED));
+                if (settled || capped)
+                    && let Some((_, residual, angles, laid)) = kept.take()
+                {
+                    let solution = AbfSolution {
+                        angles,
+                        iterations,
+                        residual,
+                        converged: false,
+                    };
+                    return Ok((solution, Some(laid)));
                 }
             }
-        }
-    }
-    let pattern = match problem.rows.count {
-        0 => None,
-        n => Some(SpdPattern::of_vertices(
-            2 * n,
-            &positions,
-            order,
-            &problem.rows.of_vertex,
-            2,
-        )?),
-    };
-
-    let mut state = State {
-        alpha: problem.beta.clone(),
-        lambda_tri: vec![0.0; tris.len()],
-        lambda: vec![0.0; 2 * problem.rows.count],
-    };
-    // The residuals of the current state: its norm says whether to step,
-    // and the step starts from them (computed once per state: their sines
-    // and logarithms cost a fifth of a step).
-    let mut residuals = problem.residuals(&state);
-    let mut residual = residual_norm(&problem.weight, &residuals);
-    let mut iterations = 0;
-    let mut values = vec![0.0; positions.len()];
-    // The iterate with the smallest residual: on a raw scan the residual
-    // can creep down linearly and rise again (a 108k-face scanned bust:
-    // 0.19 after 65 steps, 0.10 after 100), and the least-squares layout
-    // of such angles is still far more conformal than a fallback's.
-    let mut best = (residual, state.alpha.clone());
-    // Best residual after each step, the step of the last stall, and the
-    // best-scored iterate (score, residual, angles, layout).
-    let mut best_after = vec![residual];
-    let mut stalled_at = 0;
-    let mut kept: Option<(f64, f64, Vec<[f64; 3]>, T)> = None;
-    while residual > opts.tolerance {
-        let capped = iterations == opts.max_iterations;
-        let stalled = iterations >= stalled_at + STALL_WINDOW
-            && best.0 > 0.5 * best_after[iterations - STALL_WINDOW];
-        if stalled || (capped && kept.is_some()) {
-            stalled_at = iterations;
-            let previous = kept.as_ref().map(|k| k.0);
-            if let Some((now, laid)) = score(&best.1)
-                && previous.is_none_or(|p| now < p)
-            {
-                kept = Some((now, best.0, best.1.clone(), laid));
-            }
-            // Ends when the layout no longer improves by more than SETTLED
-            // (an unusable one is no improvement), or at the cap.
-            let settled =
-                previous.is_some_and(|p| kept.as_ref().is_some_and(|k| k.0 >= p - SETTLED));
-            if (settled || capped)
-                && let Some((_, residual, angles, laid)) = kept.take()
-            {
+            if capped {
                 let solution = AbfSolution {
-                    angles,
+                    angles: best.1,
                     iterations,
-                    residual,
+                    residual: best.0,
                     converged: false,
                 };
-                return Ok((solution, Some(laid)));
+                return Ok((solution, None));
             }
-        }
-        if capped {
-            let solution = AbfSolution {
-                angles: best.1,
-                iterations,
-                residual: best.0,
-                converged: false,
-            };
-            return Ok((solution, None));
-        }
-        iterations += 1;
-        let step = problem.newton_step(&state, residuals, pattern.as_ref(), &mut values)?;
-        // Full Newton steps, as ABF++ takes them: the residual may rise on the
-        // first steps from a sliver-rich start and then falls fast, so a
-        // monotone line search would stall. Steps are only shortened to keep
-        // every angle inside (0, pi).
-        let mut s = 1.0;
-        loop {
-            let trial = state.plus(&step, s);
-            if trial.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
-                state = trial;
-                break;
+            iterations += 1;
+            let step = problem.newton_step(&state, residuals, pattern.as_ref(), &mut values)?;
+            // Full Newton steps, as ABF++ takes them: the residual may rise on the
+            // first steps from a sliver-rich start and then falls fast, so a
+            // monotone line search would stall. Steps are only shortened to keep
+            // every angle inside (0, pi).
+            let mut s = 1.0;
+            loop {
+                let trial = state.plus(&step, s);
+                if trial.alpha.iter().flatten().all(|&x| x > 0.0 && x < PI) {
+                    state = trial;
+                    break;
+                }
+                s *= 0.5;
+                if s < 1e-4 {
+                    return Err(Error::invalid(format!(
+                        "ABF++ could not keep the angles valid after {iterations} Newton steps"
+                    )));
+                }
             }
-            s *= 0.5;
-            if s < 1e-4 {
+            residuals = problem.residuals(&state);
+            residual = residual_norm(&problem.weight, &residuals);
+            if !residual.is_finite() || residual > 1e6 {
                 return Err(Error::invalid(format!(
-                    "ABF++ could not keep the angles valid after {iterations} Newton steps"
+                    "ABF++ diverged after {iterations} Newton steps (residual {residual:.2e})"
                 )));
             }
+            if residual < best.0 {
+                best = (residual, state.alpha.clone());
+            }
+            best_after.push(best.0);
         }
-        residuals = problem.residuals(&state);
-        residual = residual_norm(&problem.weight, &residuals);
-        if !residual.is_finite() || residual > 1e6 {
-            return Err(Error::invalid(format!(
-                "ABF++ diverged after {iterations} Newton steps (residual {residual:.2e})"
-            )));
-        }
-        if residual < best.0 {
-            best = (residual, state.alpha.clone());
-        }
-        best_after.push(best.0);
+        let solution = AbfSolution {
+            angles: state.alpha,
+            iterations,
+            residual,
+            converged: true,
+        };
+        Ok((solution, None))
     }
-    let solution = AbfSolution {
-        angles: state.alpha,
-        iterations,
-        residual,
-        converged: true,
-    };
-    Ok((solution, None))
 }
 
 /// What eliminating one face's angles and triangle constraint leaves
@@ -399,7 +425,42 @@ fn residual_norm(weight: &[[f64; 3]], r: &Residuals) -> f64 {
         .fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
-impl Problem<'_> {
+impl<'a> Problem<'a> {
+    /// The target angles (interior vertices' 3D angles scaled to sum to
+    /// 2 pi) and their weights.
+    fn new(mesh: &'a TriMesh, rows: Rows) -> Problem<'a> {
+        let tris = &mesh.triangles;
+        let theta = corner_angles(mesh);
+        let mut sum_at = vec![0.0; mesh.num_vertices()];
+        for (t, a) in tris.iter().zip(&theta) {
+            for i in 0..3 {
+                sum_at[t[i] as usize] += a[i];
+            }
+        }
+        let beta: Vec<[f64; 3]> = tris
+            .iter()
+            .zip(&theta)
+            .map(|(t, a)| {
+                std::array::from_fn(|i| {
+                    let v = t[i] as usize;
+                    let scaled = if rows.of_vertex[v] != NOT_INTERIOR && sum_at[v] > 0.0 {
+                        a[i] * TAU / sum_at[v]
+                    } else {
+                        a[i]
+                    };
+                    scaled.clamp(MIN_ANGLE, MAX_ANGLE)
+                })
+            })
+            .collect();
+        let weight = beta.iter().map(|b| b.map(|x| 1.0 / (x * x))).collect();
+        Problem {
+            tris,
+            rows,
+            weight,
+            beta,
+        }
+    }
+
     fn residuals(&self, x: &State) -> Residuals {
         let mut c_tri = vec![0.0; self.tris.len()];
         let mut c_vertex = vec![0.0; x.lambda.len()];

@@ -129,8 +129,12 @@ pub fn flatten_ordered(
     // layout's system and the balancing's Laplacian do not depend on the
     // angles: they are made on the other core meanwhile.
     let balancing = opts.area_weight > 0.0 && opts.balance_rounds > 0;
+    // ABF++'s set-up takes both cores; then its Newton steps (serial
+    // factorisations) take one while the other makes the layout's system
+    // and the balancing's Laplacian, which do not depend on its angles.
+    let abf = abf::Prepared::new(chart, topo, Some(order));
     let (solved, (prepared, balancer)) = rayon::join(
-        || abf::solve_until(chart, topo, opts, Some(order), &mut score),
+        || abf?.solve_until(opts, &mut score),
         || {
             rayon::join(
                 || Layout::new(chart, topo, Some(order)).ok(),

@@ -132,15 +132,22 @@ impl Balancer {
         // often unfold them), never gain any.
         let mut allowed = bad(&current);
         let mut rounds = 0;
+        // Each triangle's scale in the last round: the next round's Newton
+        // starts there (a round moves it little), 0 before the first.
+        let mut scales = vec![0.0; faces.len()];
         while rounds < max_rounds {
             // Local: the scaled rotation each triangle should be, and what it
             // asks of each of its edges (faces in parallel, summed in order
             // below, so the sums do not depend on the thread count).
-            let pulls: Vec<[DVec2; 3]> = (faces, (local, local_inverse))
+            let pulls: Vec<[DVec2; 3]> = (faces, (local, local_inverse), &mut scales)
                 .into_par_iter()
                 .enumerate()
-                .map(|(f, (t, (p, inverse)))| {
-                    let l = target(jacobian(*inverse, t.map(|v| current[v as usize])), lambda);
+                .map(|(f, (t, (p, inverse), s))| {
+                    let l = target(
+                        jacobian(*inverse, t.map(|v| current[v as usize])),
+                        lambda,
+                        s,
+                    );
                     std::array::from_fn(|c| {
                         let (a, b) = ((c + 1) % 3, (c + 2) % 3);
                         l * (p[a] - p[b]) * laplacian.weight(f, c)
@@ -221,26 +228,32 @@ fn jacobian(local_inverse: Option<DMat2>, q: [DVec2; 3]) -> DMat2 {
 }
 
 /// The local step: the scaled rotation nearest `j` under the hybrid
-/// energy.
-fn target(j: DMat2, lambda: f64) -> DMat2 {
+/// energy. `s` is where Newton starts (the triangle's scale in the last
+/// round; 0 for none) and becomes the scale found.
+fn target(j: DMat2, lambda: f64, s: &mut f64) -> DMat2 {
     // Similarity part of J: [[c1, c2], [-c2, c1]] in row terms.
     let c1 = (j.x_axis.x + j.y_axis.y) / 2.0;
     let c2 = (j.y_axis.x - j.x_axis.y) / 2.0;
-    let c = c1.hypot(c2);
+    let c = (c1 * c1 + c2 * c2).sqrt();
     if c <= 1e-300 {
         return DMat2::IDENTITY;
     }
-    // lambda s^3 + (1 - lambda) s - c = 0 has one positive root; Newton
-    // from the larger of c and 1 comes down to it monotonically.
-    let mut s = c.max(1.0);
+    // lambda s^3 + (1 - lambda) s - c = 0 has one positive root, and the
+    // cubic is increasing and convex for s > 0: Newton from the right of
+    // the root comes down to it monotonically, from the left it steps
+    // past it once first. Without a last round's scale, the larger of c
+    // and 1 lies to the right.
+    if *s <= 0.0 {
+        *s = c.max(1.0);
+    }
     for _ in 0..50 {
-        let f = lambda * s * s * s + (1.0 - lambda) * s - c;
-        let df = 3.0 * lambda * s * s + (1.0 - lambda);
+        let f = lambda * *s * *s * *s + (1.0 - lambda) * *s - c;
+        let df = 3.0 * lambda * *s * *s + (1.0 - lambda);
         if df <= 0.0 {
             break;
         }
         let step = f / df;
-        s -= step;
+        *s -= step;
         if step.abs() <= 1e-14 * s.abs().max(1e-300) {
             break;
         }
@@ -257,9 +270,19 @@ mod tests {
     #[test]
     fn the_local_step_keeps_rotation_and_pulls_scale_towards_one() {
         let turn = DMat2::from_angle(0.4);
-        for (scale, lambda) in [(2.0, 0.0), (2.0, 0.5), (0.3, 0.5), (2.0, 0.999)] {
-            let l = target(turn * scale, lambda);
+        // Newton started from nothing, from either side of the root, and
+        // from far to its left: the same root.
+        for ((scale, lambda), start) in [(2.0, 0.0), (2.0, 0.5), (0.3, 0.5), (2.0, 0.999)]
+            .into_iter()
+            .flat_map(|case| [0.0, 0.01, 0.9, 3.0].map(|start| (case, start)))
+        {
+            let mut found = start;
+            let l = target(turn * scale, lambda, &mut found);
             let s = l.x_axis.length();
+            assert!(
+                (found - s).abs() < 1e-12,
+                "start {start}: {found} against {s}"
+            );
             // A rotation times s, s between the original scale and 1.
             assert!((l - turn * s).abs_diff_eq(DMat2::ZERO, 1e-12), "{l:?}");
             assert!(

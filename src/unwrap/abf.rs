@@ -209,7 +209,6 @@ where
 /// the other.
 pub struct Prepared<'a> {
     problem: Problem<'a>,
-    positions: usize,
     pattern: Option<SpdPattern>,
     state: State,
     residuals: Residuals,
@@ -250,7 +249,7 @@ impl<'a> Prepared<'a> {
                         2,
                     )?),
                 };
-                Ok::<_, Error>((positions.len(), pattern))
+                Ok::<_, Error>(pattern)
             },
             || {
                 let problem = Problem::new(mesh, rows.clone());
@@ -263,11 +262,9 @@ impl<'a> Prepared<'a> {
                 (problem, state, residuals)
             },
         );
-        let (positions, pattern) = pattern?;
         Ok(Prepared {
             problem,
-            positions,
-            pattern,
+            pattern: pattern?,
             state,
             residuals,
         })
@@ -284,14 +281,13 @@ impl<'a> Prepared<'a> {
     {
         let Prepared {
             problem,
-            positions,
             pattern,
             mut state,
             mut residuals,
         } = self;
         let mut residual = residual_norm(&problem.weight, &residuals);
         let mut iterations = 0;
-        let mut values = vec![0.0; positions];
+        let mut values = vec![0.0; pattern.as_ref().map_or(0, SpdPattern::entries)];
         // The iterate with the smallest residual: on a raw scan the residual
         // can creep down linearly and rise again (a 108k-face scanned bust:
         // 0.19 after 65 steps, 0.10 after 100), and the least-squares layout

@@ -54,20 +54,7 @@ impl Dirichlet {
         positive: bool,
         order: Option<&VertexOrder>,
     ) -> Result<Dirichlet> {
-        let mut referenced = vec![false; chart.num_vertices()];
-        for t in &chart.triangles {
-            for &v in t {
-                referenced[v as usize] = true;
-            }
-        }
-        let mut index = vec![u32::MAX; chart.num_vertices()];
-        let mut count = 0u32;
-        for (v, slot) in index.iter_mut().enumerate() {
-            if referenced[v] && !fixed[v] {
-                *slot = count;
-                count += 1;
-            }
-        }
+        let (index, count) = unknowns(chart, |v| !fixed[v]);
         let edges = cotangent_edges(chart, angles, positive);
         // L = minus the Laplacian, integrated, over the free vertices.
         let mut positions = Vec::with_capacity(edges.len() * 3);
@@ -190,15 +177,7 @@ impl OpenedLogScale {
         defect: &[f64],
         order: &VertexOrder,
     ) -> Result<OpenedLogScale> {
-        let mut index = vec![u32::MAX; surface.num_vertices()];
-        let mut count = 0u32;
-        for &v in surface.triangles.iter().flatten() {
-            index[v as usize] = 0;
-        }
-        for slot in index.iter_mut().filter(|i| **i == 0) {
-            *slot = count;
-            count += 1;
-        }
+        let (index, count) = unknowns(surface, |_| true);
         let edges = cotangent_edges(surface, angles, false);
         // Per edge its two diagonal entries and its off-diagonal one, then
         // one more diagonal entry per vertex (1 where it is held).
@@ -256,6 +235,25 @@ impl OpenedLogScale {
             .map(|&k| if k == u32::MAX { 0.0 } else { rhs[k as usize] })
             .collect())
     }
+}
+
+/// The unknown of each vertex of `mesh` that a face uses and `free`
+/// keeps, numbered in vertex order, `u32::MAX` for the others; and how
+/// many there are.
+fn unknowns(mesh: &TriMesh, free: impl Fn(usize) -> bool) -> (Vec<u32>, u32) {
+    let mut referenced = vec![false; mesh.num_vertices()];
+    for &v in mesh.triangles.iter().flatten() {
+        referenced[v as usize] = true;
+    }
+    let mut index = vec![u32::MAX; mesh.num_vertices()];
+    let mut count = 0u32;
+    for (v, slot) in index.iter_mut().enumerate() {
+        if referenced[v] && free(v) {
+            *slot = count;
+            count += 1;
+        }
+    }
+    (index, count)
 }
 
 /// Every edge of `mesh` once per face, with the half cotangent of the

@@ -125,13 +125,11 @@ pub fn flatten_ordered(
             unfold(layout::from_angles(chart, topo, angles, Some(order)).ok()?);
         (left == 0).then(|| (conf_mean(chart, &uv), (uv, unfolded, left)))
     };
-    // ABF++'s Newton steps are serial (one factorisation each), and the
-    // layout's system and the balancing's Laplacian do not depend on the
-    // angles: they are made on the other core meanwhile.
+    // ABF++'s set-up takes both cores; then its Newton steps (serial, one
+    // factorisation each) take one while the other makes the layout's
+    // system and the balancing's Laplacian, which do not depend on the
+    // angles.
     let balancing = opts.area_weight > 0.0 && opts.balance_rounds > 0;
-    // ABF++'s set-up takes both cores; then its Newton steps (serial
-    // factorisations) take one while the other makes the layout's system
-    // and the balancing's Laplacian, which do not depend on its angles.
     let abf = abf::Prepared::new(chart, topo, Some(order));
     let (solved, (prepared, balancer)) = rayon::join(
         || abf?.solve_until(opts, &mut score),

@@ -8,13 +8,13 @@
 //! u2, the map is conformal when sum_j (q_{j+2} - q_{j+1}) u_j = 0; the
 //! residual is weighted by 1/sqrt(2 area) so each triangle counts by area.
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use glam::{DVec2, DVec3};
 
 use crate::error::Result;
 use crate::linalg::{SpdPattern, VertexOrder};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
 use crate::mesh::{FaceId, HalfedgeId, Topology, TriMesh, VertexId};
 
 /// Uvs of a disk-shaped chart whose corners should have `angles`; `order`,

@@ -219,11 +219,11 @@ fn over_white(rgba: &[[u8; 4]]) -> Vec<[u8; 3]> {
         .collect()
 }
 
-/// Connected groups of opaque pixels, 8-neighbours, wrapping around.
+/// Connected groups of pixels showing vessel, 8-neighbours, wrapping around.
 fn vessel_pieces(rgba: &[[u8; 4]], w: usize, h: usize) -> usize {
     let opaque: Vec<bool> = rgba
         .iter()
-        .map(|p| p[3] >= vessel_tree::VESSEL_ALPHA)
+        .map(|p| p[3] >= vessel_tree::VESSEL_SEEN)
         .collect();
     let mut seen = vec![false; w * h];
     let mut pieces = 0;
@@ -271,8 +271,8 @@ fn the_vessel_overlay_tiles_in_at_most_one_piece_per_tree_as_the_photograph_cove
     let after = seam_of(&tiled);
     assert!(after <= 1.15, "the grown vessels do not tile ({after})");
     let crossing = |rgba: &[[u8; 4]]| {
-        (0..w).any(|x| rgba[x][3] >= vessel_tree::VESSEL_ALPHA)
-            && (0..h).any(|y| rgba[y * w][3] >= vessel_tree::VESSEL_ALPHA)
+        (0..w).any(|x| rgba[x][3] >= vessel_tree::VESSEL_SEEN)
+            && (0..h).any(|y| rgba[y * w][3] >= vessel_tree::VESSEL_SEEN)
     };
     assert!(crossing(&tiled));
     assert!(!crossing(&photo));
@@ -282,13 +282,13 @@ fn the_vessel_overlay_tiles_in_at_most_one_piece_per_tree_as_the_photograph_cove
     let pieces = vessel_pieces(&tiled, w, h);
     assert!((1..=roots).contains(&pieces), "{pieces} pieces");
     // As much vessel as the photograph shows.
-    let cover = |rgba: &[[u8; 4]]| vessel_tree::coverage(rgba.iter().map(|p| p[3]));
-    let (c0, c1) = (cover(&photo), cover(&tiled));
-    assert!((c1 - c0).abs() <= 0.05 * c0, "coverage {c1} against {c0}");
+    let opacity = |rgba: &[[u8; 4]]| vessel_tree::opacity(rgba.iter().map(|p| p[3]));
+    let (c0, c1) = (opacity(&photo), opacity(&tiled));
+    assert!((c1 - c0).abs() <= 0.05 * c0, "opacity {c1} against {c0}");
     // The colour of the photograph's vessels.
     let opaque: Vec<&[u8; 4]> = photo
         .iter()
-        .filter(|p| p[3] >= vessel_tree::VESSEL_ALPHA)
+        .filter(|p| p[3] >= vessel_tree::VESSEL_SEEN)
         .collect();
     let mean = |k: usize| opaque.iter().map(|p| p[k] as f64).sum::<f64>() / opaque.len() as f64;
     for (k, &c) in tiled[0][..3].iter().enumerate() {

@@ -22,7 +22,7 @@ use crate::synth::{lighting, mask, vessel_tree, vessels};
 /// Bump when a change to synthesis, height maps or overlays changes what
 /// `build` writes for the same entry: outputs built under another recipe
 /// are then rebuilt when a bake needs them.
-pub const RECIPE: u32 = 3;
+pub const RECIPE: u32 = 4;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Built {

@@ -19,8 +19,10 @@ use glam::DVec2;
 
 use crate::rng;
 
-/// Alpha from which an overlay pixel counts as vessel (coverage figures).
-pub const VESSEL_ALPHA: u8 = 128;
+/// Alpha from which an overlay pixel shows vessel: under the faintest a
+/// drawn vessel's centre line gets (a leaf where it runs deepest, about
+/// 95), so a drawn tree is one piece at it.
+pub const VESSEL_SEEN: u8 = 64;
 
 /// How a tree is grown: lengths in pixels of a `width` x `height` image.
 #[derive(Clone, Debug)]
@@ -253,29 +255,57 @@ fn smooth(position: &mut [DVec2], parent: &[Option<usize>], size: DVec2, rounds:
     }
 }
 
+/// Optical depth of blood across a leaf vessel's diameter (the leaf's
+/// radius plus the half pixel of its antialiased edge): its centre is
+/// 1 - e^-1.6 = 80% opaque before blurring.
+const LEAF_OPTICAL_DEPTH: f64 = 1.6;
+
+/// Blur of a vessel's image by the tissue over it, per pixel of radius:
+/// wider vessels lie deeper, and light scattered by more tissue spreads
+/// their image wider.
+const SCATTER_PER_RADIUS: f64 = 0.35;
+
 /// Opacity of the tree drawn `width` x `height`, wrapping around, each
-/// segment a capsule of its child's radius times `scale` (pixels), edges
-/// antialiased over a pixel.
-pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64) -> Vec<f32> {
+/// segment a cylinder of blood of its child's radius times `scale`
+/// (pixels) seen from above through the tissue.
+///
+/// By Beer-Lambert a line of sight through the cylinder is 1 - e^(-mu L)
+/// opaque for the chord L it cuts (mu fixed by `LEAF_OPTICAL_DEPTH`), so
+/// thin vessels are fainter than thick ones. The tissue over the vessel
+/// scatters that image: the profile is taken as a Gaussian of the chord
+/// profile's spread widened by the scatter (`SCATTER_PER_RADIUS`), its
+/// peak lowered so the blood seen stays the same. Deep, wide vessels are
+/// broad and soft, capillaries thin and sharp, as under a mucosa (a flat
+/// capsule made every vessel an evenly inked line). `depth` (0..1 over
+/// the image, 1 at the surface) fades a vessel where it runs deeper.
+pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64, depth: &[f32]) -> Vec<f32> {
     let size = DVec2::new(width as f64, height as f64);
+    let mu = LEAF_OPTICAL_DEPTH / (2.0 * (scale + 0.5));
     let mut alpha = vec![0.0f32; width * height];
     for (n, parent) in tree.parent.iter().enumerate() {
         let Some(p) = *parent else { continue };
         let a = tree.position[n];
         let b = a + towards(a, tree.position[p], size);
-        let r = tree.radius[n] * scale;
-        let lo = (a.min(b) - r - 1.0).floor();
-        let hi = (a.max(b) + r + 1.0).ceil();
+        let r = tree.radius[n] * scale + 0.5;
+        // The chord profile's spread (a half disc's: r / 2) widened by
+        // the scatter; 3 spreads out it is under 1% of its peak.
+        let chord_spread = 0.5 * r;
+        let scatter = SCATTER_PER_RADIUS * (r - 0.5);
+        let spread = (chord_spread * chord_spread + scatter * scatter).sqrt();
+        let peak = (1.0 - (-mu * 2.0 * r).exp()) * chord_spread / spread;
+        let reach = 3.0 * spread;
+        let lo = (a.min(b) - reach).floor();
+        let hi = (a.max(b) + reach).ceil();
         let ab = b - a;
         for y in lo.y as i64..=hi.y as i64 {
             for x in lo.x as i64..=hi.x as i64 {
                 let q = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
                 let t = ((q - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
-                let d = (q - (a + ab * t)).length();
-                let v = (r + 0.5 - d).clamp(0.0, 1.0) as f32;
-                if v > 0.0 {
+                let d2 = (q - (a + ab * t)).length_squared();
+                if d2 < reach * reach {
                     let i = y.rem_euclid(height as i64) as usize * width
                         + x.rem_euclid(width as i64) as usize;
+                    let v = (peak * (-d2 / (2.0 * spread * spread)).exp()) as f32 * depth[i];
                     alpha[i] = alpha[i].max(v);
                 }
             }
@@ -284,22 +314,57 @@ pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64) -> Vec<f32> {
     alpha
 }
 
-/// Fraction of pixels at least `VESSEL_ALPHA`.
-pub fn coverage(alpha: impl Iterator<Item = u8>) -> f64 {
-    let (mut opaque, mut all) = (0usize, 0usize);
-    for a in alpha {
-        opaque += (a >= VESSEL_ALPHA) as usize;
-        all += 1;
-    }
-    opaque as f64 / all.max(1) as f64
+/// How near the surface the vessels run over a `width` x `height` tile, in
+/// [0.5, 1]: a smooth random field of a few waves that fit the tile
+/// (whole periods across it, so it tiles), seeded. Real vessels dip in
+/// and out of sight along their course.
+pub fn vessel_depth(width: usize, height: usize, seed: u64) -> Vec<f32> {
+    let waves: Vec<(f64, f64, f64)> = (0..4u64)
+        .map(|k| {
+            let pick = |j: u64| rng::hash(seed, &[3, k, j]);
+            let kx = (pick(0) % 5) as f64 - 2.0;
+            let ky = (pick(1) % 3) as f64 + 1.0;
+            let phase = (pick(2) >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU;
+            (kx, ky, phase)
+        })
+        .collect();
+    (0..width * height)
+        .map(|i| {
+            let (x, y) = (
+                (i % width) as f64 / width as f64,
+                (i / width) as f64 / height as f64,
+            );
+            let n = waves
+                .iter()
+                .map(|&(kx, ky, phase)| (std::f64::consts::TAU * (kx * x + ky * y) + phase).sin())
+                .sum::<f64>()
+                / waves.len() as f64;
+            // n is within [-1, 1], mostly within [-0.5, 0.5].
+            (0.75 + 0.5 * n).clamp(0.5, 1.0) as f32
+        })
+        .collect()
 }
 
-/// A tileable overlay in the colours and coverage of `photo`, a vessel
+/// Mean opacity: how much vessel an overlay shows, soft edges counted by
+/// their share.
+pub fn opacity(alpha: impl Iterator<Item = u8>) -> f64 {
+    let (mut sum, mut all) = (0.0f64, 0usize);
+    for a in alpha {
+        sum += a as f64 / 255.0;
+        all += 1;
+    }
+    sum / all.max(1) as f64
+}
+
+/// A tileable overlay in the colours and opacity of `photo`, a vessel
 /// overlay (RGBA, vessels opaque) made from a photograph: its vessels'
-/// mean colour, its vessel coverage, drawn on a tree grown from `seed`.
-/// A photograph without vessels gives a transparent overlay.
+/// mean colour and mean opacity, drawn on a tree grown from `seed`. The
+/// opacity, not the count of opaque pixels, is matched: the drawn vessels
+/// are soft (`draw`), and a threshold would count their blurred edges
+/// in or out wholesale. A photograph without vessels gives a transparent
+/// overlay.
 pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u64) -> Vec<[u8; 4]> {
-    let target = coverage(photo.iter().map(|p| p[3]));
+    let target = opacity(photo.iter().map(|p| p[3]));
     let (mut sum, mut weight) = ([0.0f64; 3], 0.0f64);
     for p in photo {
         let w = p[3] as f64;
@@ -313,11 +378,11 @@ pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u6
         return vec![[colour[0], colour[1], colour[2], 0]; width * height];
     }
     let tree = grow(&TreeOptions::new(width, height, seed));
-    // Coverage grows with the width (about linearly, plus the antialiased
-    // edge): the leaf radius rescaled in proportion a few times finds the
-    // photograph's.
+    // Opacity grows with the width (about linearly): the leaf radius
+    // rescaled in proportion a few times finds the photograph's.
+    let depth = vessel_depth(width, height, seed);
     let drawn = |scale: f64| -> Vec<u8> {
-        draw(&tree, width, height, scale)
+        draw(&tree, width, height, scale, &depth)
             .iter()
             .map(|&a| (a * 255.0).round() as u8)
             .collect()
@@ -325,7 +390,7 @@ pub fn tileable_overlay(photo: &[[u8; 4]], width: usize, height: usize, seed: u6
     let mut scale = 0.75;
     let mut alpha = drawn(scale);
     for _ in 0..4 {
-        let c = coverage(alpha.iter().copied());
+        let c = opacity(alpha.iter().copied());
         if c <= 0.0 || ((c - target) / target).abs() < 0.02 {
             break;
         }
@@ -367,6 +432,37 @@ mod tests {
             })
             .fold(0.0, f64::max);
         assert!(farthest <= opts.reach, "{farthest} > {}", opts.reach);
+    }
+
+    #[test]
+    fn wide_vessels_are_darker_and_softer_than_capillaries() {
+        // Two straight vessels across a 64-pixel tile, radii 1 and 4 leaves
+        // at a pixel a leaf, at the surface (depth 1) everywhere.
+        // (Segments shorter than half the tile: the shorter way round.)
+        let tree = Tree {
+            position: vec![
+                DVec2::new(16.0, 4.0),
+                DVec2::new(16.0, 32.0),
+                DVec2::new(16.0, 60.0),
+                DVec2::new(48.0, 4.0),
+                DVec2::new(48.0, 32.0),
+                DVec2::new(48.0, 60.0),
+            ],
+            parent: vec![None, Some(0), Some(1), None, Some(3), Some(4)],
+            radius: vec![1.0, 1.0, 1.0, 4.0, 4.0, 4.0],
+        };
+        let alpha = draw(&tree, 64, 64, 1.0, &[1.0; 64 * 64]);
+        let across = |x: usize| alpha[32 * 64 + x];
+        let (thin, wide) = (across(16), across(48));
+        assert!(thin > 0.5 && wide > thin + 0.1, "{thin} {wide}");
+        // A pixel past its edge (radius 1.5 and 4.5 with the antialiasing
+        // half pixel) the capillary is gone, and the wide vessel's
+        // scattered image is still a tenth of its peak.
+        assert!(across(18) < 0.01 * thin, "{}", across(18));
+        assert!(across(53) > 0.1 * wide, "{}", across(53));
+        // A vessel running deeper is fainter.
+        let deeper = draw(&tree, 64, 64, 1.0, &[0.5; 64 * 64]);
+        assert!((deeper[32 * 64 + 48] - 0.5 * wide).abs() < 1e-6);
     }
 
     #[test]

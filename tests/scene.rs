@@ -171,6 +171,61 @@ fn the_generated_cavity_is_a_clean_open_surface_facing_inside() {
     assert_ne!(other.positions, mesh.positions);
 }
 
+/// Share of the polyp facet's area facing back towards the wall (its
+/// normal against the facet's mean normal, the polyp's axis): a head
+/// overhanging a neck.
+fn polyp_underside(mesh: &TriMesh) -> f64 {
+    let facets = mesh.facets.as_ref().unwrap();
+    let polyp = facets.names.iter().position(|n| n == "polyp-1").unwrap() as u32;
+    let faces: Vec<usize> = (0..mesh.num_faces())
+        .filter(|&f| facets.of_face[f] == polyp)
+        .collect();
+    let axis = faces
+        .iter()
+        .map(|&f| mesh.face_area_vector(f))
+        .sum::<DVec3>()
+        .normalize();
+    let area = |f: usize| mesh.face_area(f);
+    let under: f64 = faces
+        .iter()
+        .filter(|&&f| mesh.face_normal(f).dot(axis) < -0.1)
+        .map(|&f| area(f))
+        .sum();
+    under / faces.iter().map(|&f| area(f)).sum::<f64>()
+}
+
+/// A sessile polyp (issue 39: "an irregular ovoid on a broad base") is a
+/// dome on the wall with no neck: none of it faces back towards the wall,
+/// where the stalked one's head overhangs its stalk; and the surface stays
+/// clean.
+#[test]
+fn a_sessile_polyp_is_a_dome_without_a_neck() {
+    let stalked = uterus::generate(&uterus::demo()).unwrap();
+    let mut p = uterus::demo();
+    p.polyps[0] = uterus::Polyp {
+        stalk_radius: 2.3,
+        stalk_length: 0.4,
+        head_radius: 2.45,
+        elongation: 1.8,
+        irregularity: 0.3,
+        lean: 10.0,
+        sessile: true,
+        ..p.polyps[0].clone()
+    };
+    let mesh = uterus::generate(&p).unwrap();
+    let topo = Topology::build(&mesh).expect("manifold");
+    let parts = Components::find(&topo).topology(&topo);
+    assert_eq!(parts.len(), 1);
+    assert_eq!((parts[0].genus, parts[0].boundary_loops), (0, 1));
+    assert_eq!(self_intersections(&mesh), 0);
+    let (sessile, on_stalk) = (polyp_underside(&mesh), polyp_underside(&stalked));
+    assert!(
+        sessile < 0.005,
+        "sessile: {sessile} of its area faces the wall"
+    );
+    assert!(on_stalk > 0.05, "stalked: {on_stalk}");
+}
+
 #[test]
 fn a_wall_thickness_closes_the_cavity_into_a_solid_a_cut_shows() {
     let p = CavityParams {

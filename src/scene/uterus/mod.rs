@@ -26,7 +26,7 @@ use crate::mesh::{Facets, Topology, TriMesh};
 use crate::rng;
 
 mod polyp;
-use polyp::{grow_polyp, polyp_footprint};
+use polyp::{grow_polyp, polyp_footprint, polyp_rise};
 
 fn default_length() -> f64 {
     40.0
@@ -113,14 +113,20 @@ pub struct Polyp {
     /// at the base to this angle at the top, towards a seeded side.
     #[serde(default)]
     pub lean: f64,
+    /// A broad-based polyp: the head sits on the wall cut above its widest
+    /// part, where it is `stalk_radius` wide, on a rounded skirt
+    /// `stalk_length` high; no neck. Most endometrial polyps are sessile.
+    #[serde(default)]
+    pub sessile: bool,
 }
 
 fn one() -> f64 {
     1.0
 }
 
-/// A cavity with two myomas and a fundal polyp (what `organtex generate
-/// uterus` writes; the default scene configures the same by hand).
+/// A cavity with two myomas and a fundal polyp on a stalk (what `organtex
+/// generate uterus` writes; the default scene has the same cavity and
+/// myomas, and a sessile polyp).
 pub fn demo() -> CavityParams {
     CavityParams {
         seed: 7,
@@ -154,6 +160,7 @@ pub fn demo() -> CavityParams {
             elongation: 1.3,
             irregularity: 0.2,
             lean: 25.0,
+            sessile: false,
         }],
     }
 }
@@ -399,7 +406,7 @@ pub fn generate(p: &CavityParams) -> Result<TriMesh, ParamError> {
     for (k, site) in sites.iter().enumerate().skip(p.myomas.len()) {
         let pl = &p.polyps[k - p.myomas.len()];
         let span = cavity_span(&original, &sphere.triangles, site);
-        let rise = pl.stalk_length + 2.0 * pl.head_radius * pl.elongation;
+        let rise = polyp_rise(pl);
         if rise > 0.6 * span {
             return Err(bad(
                 site.key.clone(),

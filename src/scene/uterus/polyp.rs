@@ -10,9 +10,24 @@ use glam::DVec3;
 use super::{Polyp, Site, smoothstep, tangent_frame};
 use crate::rng;
 
-/// Footprint radius of a polyp on the wall.
+/// Footprint radius of a polyp on the wall: room for the flare beyond the
+/// stalk, or beyond a sessile polyp's base.
 pub(super) fn polyp_footprint(pl: &Polyp) -> f64 {
-    pl.head_radius + 2.0 * pl.stalk_radius
+    if pl.sessile {
+        pl.head_radius + pl.stalk_radius
+    } else {
+        pl.head_radius + 2.0 * pl.stalk_radius
+    }
+}
+
+/// How far a polyp rises off the wall, at most: a stalk and a whole head,
+/// or a sessile head's part above its base.
+pub(super) fn polyp_rise(pl: &Polyp) -> f64 {
+    if pl.sessile {
+        polyp_profile(pl, polyp_footprint(pl)).point(0.0).1
+    } else {
+        pl.stalk_length + 2.0 * pl.head_radius * pl.elongation
+    }
 }
 
 /// A polyp: the wall's faces within its footprint are removed, and the
@@ -258,15 +273,23 @@ impl Profile {
 
 /// Head top, the head (a half ellipse, `elongation` times as high as
 /// wide) down to where it meets the stalk, the stalk, then a quarter-round
-/// fillet out to the footprint's rim on the wall. A simple curve in the
+/// fillet out to the footprint's rim on the wall. A sessile head stops
+/// above its widest part, where it is the stalk's width, and sits on the
+/// fillet itself (a dome on a skirt, no neck). A simple curve in the
 /// half-plane r >= 0, so the surface it sweeps is embedded.
 fn polyp_profile(pl: &Polyp, footprint: f64) -> Profile {
     let (rh, rs) = (pl.head_radius, pl.stalk_radius);
     let fillet = rs.min(0.5 * pl.stalk_length);
-    let neck = pl.stalk_length;
     let tall = rh * pl.elongation;
-    let centre = neck + tall * (1.0 - (rs / rh).powi(2)).sqrt();
-    let end = -((rh * rh - rs * rs).sqrt() / rh).asin();
+    // Where the head's ellipse is the stalk's width: above its centre for
+    // a sessile head, below it on a stalk.
+    let lift = tall * (1.0 - (rs / rh).powi(2)).sqrt();
+    let at = ((rh * rh - rs * rs).sqrt() / rh).asin();
+    let (centre, end) = if pl.sessile {
+        (fillet - lift, at)
+    } else {
+        (pl.stalk_length + lift, -at)
+    };
     let mut points = Vec::new();
     for k in 0..=60 {
         let a = PI / 2.0 + (end - PI / 2.0) * k as f64 / 60.0;

@@ -585,7 +585,7 @@ fn carving_the_default_wall_along_a_tunnel() {
     let node = bake.node("uterus").unwrap();
     assert!(Arc::ptr_eq(&node, &bake.node("uterus").unwrap()));
     let mesh = node.tet_mesh().unwrap();
-    assert_eq!(mesh.num_tets(), 190_005);
+    assert_eq!(mesh.num_tets(), 275_122);
     let mut c = Carving::new(node.clone(), CarvingOptions::default()).unwrap();
     let mut surface = surface_of(&c);
     // The stuffed wall's boundary has one edge where two tets touch.

@@ -39,7 +39,7 @@ def test_a_tunnel_through_the_wall_keeps_the_surface_closed_and_textured(bake_di
     assert bake.nodes == ["uterus"]
     node = bake.node("uterus")
     positions, tets = node.tet_mesh()
-    assert tets.shape == (190005, 4) and positions.shape[1] == 3
+    assert tets.shape == (275122, 4) and positions.shape[1] == 3
     carving = organtex.Carving(node)
     ids, faces = carving.surface()
     surface = dict(zip(ids.tolist(), map(tuple, faces.tolist())))

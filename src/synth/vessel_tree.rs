@@ -20,8 +20,8 @@ use glam::DVec2;
 use crate::rng;
 
 /// Alpha from which an overlay pixel shows vessel: under the faintest a
-/// drawn vessel's centre line gets (a leaf where it runs deepest, about
-/// 95), so a drawn tree is one piece at it.
+/// drawn vessel's centre line gets (a leaf where it runs deepest, some 90
+/// at the scales the database draws), so a drawn tree is one piece at it.
 pub const VESSEL_SEEN: u8 = 64;
 
 /// How a tree is grown: lengths in pixels of a `width` x `height` image.
@@ -288,7 +288,7 @@ pub fn draw(tree: &Tree, width: usize, height: usize, scale: f64, depth: &[f32])
         let b = a + towards(a, tree.position[p], size);
         let r = tree.radius[n] * scale + 0.5;
         // The chord profile's spread (a half disc's: r / 2) widened by
-        // the scatter; 3 spreads out it is under 1% of its peak.
+        // the scatter; 3 spreads out it is about 1% of its peak.
         let chord_spread = 0.5 * r;
         let scatter = SCATTER_PER_RADIUS * (r - 0.5);
         let spread = (chord_spread * chord_spread + scatter * scatter).sqrt();

@@ -1,5 +1,5 @@
 //! A tileable vessel overlay grown as a tree on a torus, in the colour and
-//! coverage of a photograph's vessels.
+//! opacity of a photograph's vessels.
 //!
 //! A photograph's vessels cannot tile as they are (they end at its edges),
 //! and pixel-by-pixel resynthesis (FNPTS) breaks the large vessels into
@@ -9,8 +9,9 @@
 //! step towards the mean of its pulls, and points the tree reaches are
 //! removed. Distances wrap around both axes, so the tree, and the overlay
 //! drawn from it, tile. Widths follow Murray's law (a parent's cubed radius
-//! is the sum of its children's), then scale so the overlay covers as much
-//! of the image as the photograph's vessels cover of theirs.
+//! is the sum of its children's), then scale so the overlay is as opaque
+//! over the image, on average, as the photograph's vessels are over theirs;
+//! each vessel is drawn as blood seen through tissue (`draw`).
 //!
 //! Hand-written: no maintained crate grows branching networks, and the
 //! growth is a few loops over points.

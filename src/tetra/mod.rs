@@ -141,11 +141,11 @@ fn nonempty(m: TetMesh, h: f64) -> Result<TetMesh> {
 /// an open surface, or parts of the input inside the solid such as the
 /// hidden halves of interpenetrating shells): it stops the refinement,
 /// and the lattice least past 1% in the other directions is kept (the
-/// coarser of equals). One lattice is not
-/// enough to tell: at a sharp rim the distance wobbles by a tenth with
-/// where the lattice happens to fall (the default uterus's wall: 1.24%,
-/// then 1.17% at a 0.85 finer lattice, then 0.96%). A lattice with no
-/// tets (the inside thinner than the cell everywhere) is refined by half.
+/// coarser of equals). One lattice is not enough to tell: at a sharp rim
+/// the distance wobbles by a tenth with where the lattice happens to fall
+/// (the default uterus's wall: 1.24%, then 1.17% at a 0.85 finer lattice,
+/// 1.02%, then 0.81%). A lattice with no tets (the inside thinner than the
+/// cell everywhere) is refined by half.
 /// Never more than `MAX_DEFAULT_TETS`: a uniform lattice that would pass
 /// it goes on graded.
 fn default_resolution(

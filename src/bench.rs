@@ -19,7 +19,7 @@ use crate::synth::block::{BlockOptions, synthesize_block};
 use crate::synth::exemplar::{Crop, Exemplar};
 use crate::synth::fnpts::{SynthOptions, synthesize};
 use crate::synth::volume::Volume;
-use crate::unwrap::{UnwrapOptions, unwrap};
+use crate::unwrap::{UnwrapOptions, unwrap, visibility};
 
 /// The timed step of a workload.
 pub type Step = Box<dyn FnMut() -> Result<()>>;
@@ -117,6 +117,20 @@ pub fn workloads() -> Vec<Workload> {
                 let mesh = io::read(&bunny(root))?;
                 Ok(Box::new(move || {
                     unwrap(&mesh, &UnwrapOptions::default(), &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
+            name: "visibility bunny",
+            min_runs: 1,
+            what: "the unwrap's first stage alone: 128 orthographic views, depth buffers, every vertex and edge tested",
+            prepare: |root| {
+                let mesh = io::read(&bunny(root))?;
+                let topo = Topology::build(&mesh)?;
+                let views = UnwrapOptions::default().viewpoints;
+                Ok(Box::new(move || {
+                    visibility::compute(&mesh, &topo, &views, &Silent);
+                    Ok(())
                 }))
             },
         },

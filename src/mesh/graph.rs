@@ -154,40 +154,46 @@ impl ShortestPaths {
 /// from it through vertices within that (straight-line) distance. For the
 /// small radii used here this is the geodesic disc; growing it by breadth
 /// first search needs no priority queue, which matters when every vertex
-/// gets a disc.
-pub fn disc(
+/// gets a disc (Seamster sums some 16k of them on the bunny). The disc
+/// lives in `scratch` until the next call.
+pub fn disc<'s>(
     graph: &EdgeGraph,
     positions: &[glam::DVec3],
     center: VertexId,
     radius: f64,
-    scratch: &mut DiscScratch,
-) -> Vec<VertexId> {
+    scratch: &'s mut DiscScratch,
+) -> &'s [VertexId] {
     scratch.generation += 1;
     let stamp = scratch.generation;
     let origin = positions[center.idx()];
     let r2 = radius * radius;
-    let mut out = vec![center];
-    scratch.seen[center.idx()] = stamp;
+    let DiscScratch { seen, out, .. } = scratch;
+    out.clear();
+    out.push(center);
+    seen[center.idx()] = stamp;
     let mut next = 0;
     while next < out.len() {
         let v = out[next];
         next += 1;
         for &(u, _) in graph.neighbours(v) {
-            if scratch.seen[u.idx()] != stamp
-                && (positions[u.idx()] - origin).length_squared() <= r2
-            {
-                scratch.seen[u.idx()] = stamp;
-                out.push(u);
+            // A vertex is measured once: one outside the radius is marked
+            // too, for the other vertices of the disc's rim that reach it.
+            if seen[u.idx()] != stamp {
+                seen[u.idx()] = stamp;
+                if (positions[u.idx()] - origin).length_squared() <= r2 {
+                    out.push(u);
+                }
             }
         }
     }
     out
 }
 
-/// Reusable visit marks for `disc`.
+/// Reusable visit marks and output for `disc`.
 pub struct DiscScratch {
     seen: Vec<u32>,
     generation: u32,
+    out: Vec<VertexId>,
 }
 
 impl DiscScratch {
@@ -195,6 +201,7 @@ impl DiscScratch {
         DiscScratch {
             seen: vec![0; n],
             generation: 0,
+            out: Vec::new(),
         }
     }
 }

@@ -23,13 +23,9 @@ pub fn triangle(
     }
     let lo = a.min(b).min(c);
     let hi = a.max(b).max(c);
-    let x0 = (lo.x - 0.5).ceil().max(0.0) as usize;
-    let y0 = (lo.y - 0.5).ceil().max(0.0) as usize;
-    let x1 = ((hi.x - 0.5).floor() + 1.0).clamp(0.0, width as f64) as usize;
-    let y1 = ((hi.y - 0.5).floor() + 1.0).clamp(0.0, height as f64) as usize;
     let inv = 1.0 / area;
-    for y in y0..y1 {
-        for x in x0..x1 {
+    for y in centres_within(lo.y, hi.y, height) {
+        for x in centres_within(lo.x, hi.x, width) {
             let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
             let w0 = (c - b).perp_dot(p - b) * inv;
             let w1 = (a - c).perp_dot(p - c) * inv;
@@ -39,6 +35,30 @@ pub fn triangle(
             }
         }
     }
+}
+
+/// The pixels of a row of `n` whose centres `x + 0.5` lie in [lo, hi].
+///
+/// By truncating casts rather than `ceil` and `floor`: without SSE4.1
+/// (not in the baseline x86-64 target) those are calls into libm, and a
+/// visibility view rasterises some 28k triangles of a few pixels each,
+/// where the calls were a tenth of the rasteriser's time.
+fn centres_within(lo: f64, hi: f64, n: usize) -> std::ops::Range<usize> {
+    let (first, last) = (lo - 0.5, hi - 0.5);
+    // ceil(first), at least 0 (a NaN gives 0, as `ceil` then `max` did).
+    let start = if first > 0.0 {
+        let t = first as usize;
+        t.saturating_add(((t as f64) < first) as usize)
+    } else {
+        0
+    };
+    // floor(last) + 1, within [0, n].
+    let end = if last >= 0.0 {
+        (last as usize).saturating_add(1).min(n)
+    } else {
+        0
+    };
+    start..end
 }
 
 /// Barycentric weights of `p` in triangle (a, b, c), `None` when the
@@ -75,12 +95,8 @@ pub fn triangle_padded(
     let heights = [(c - b).length(), (a - c).length(), (b - a).length()].map(|l| area / l);
     let lo = a.min(b).min(c) - DVec2::splat(pad);
     let hi = a.max(b).max(c) + DVec2::splat(pad);
-    let x0 = (lo.x - 0.5).ceil().max(0.0) as usize;
-    let y0 = (lo.y - 0.5).ceil().max(0.0) as usize;
-    let x1 = ((hi.x - 0.5).floor() + 1.0).clamp(0.0, width as f64) as usize;
-    let y1 = ((hi.y - 0.5).floor() + 1.0).clamp(0.0, height as f64) as usize;
-    for y in y0..y1 {
-        for x in x0..x1 {
+    for y in centres_within(lo.y, hi.y, height) {
+        for x in centres_within(lo.x, hi.x, width) {
             let w = barycentric(tri, DVec2::new(x as f64 + 0.5, y as f64 + 0.5))
                 .expect("not degenerate");
             let outside = (0..3).map(|i| -w[i] * heights[i]).fold(0.0, f64::max);
@@ -148,6 +164,45 @@ mod tests {
         assert_eq!(covered - past, inside);
         // About two pixels' band along the 20 + 20 + 28 pixels of edge.
         assert!((100..180).contains(&past), "{past}");
+    }
+
+    #[test]
+    fn centres_within_matches_ceil_and_floor() {
+        let reference = |lo: f64, hi: f64, n: usize| {
+            let start = (lo - 0.5).ceil().max(0.0) as usize;
+            let end = ((hi - 0.5).floor() + 1.0).clamp(0.0, n as f64) as usize;
+            start..end
+        };
+        let ends = [
+            -3.7,
+            -1.0,
+            -0.5,
+            -0.25,
+            0.0,
+            0.25,
+            0.5,
+            0.75,
+            1.0,
+            1.5,
+            2.4999999,
+            2.5,
+            2.5000001,
+            9.5,
+            10.0,
+            10.5,
+            11.2,
+            1e30,
+            f64::NAN,
+        ];
+        for lo in ends {
+            for hi in ends {
+                let (a, b) = (centres_within(lo, hi, 10), reference(lo, hi, 10));
+                assert!(
+                    a == b || (a.is_empty() && b.is_empty()),
+                    "{lo} {hi}: {a:?} {b:?}"
+                );
+            }
+        }
     }
 
     #[test]

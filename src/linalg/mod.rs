@@ -30,7 +30,7 @@ use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::{Conj, Mat, Par, Side};
+use faer::{Conj, MatMut, Par, Side};
 
 use crate::error::{Error, Result};
 
@@ -341,18 +341,15 @@ impl Cholesky {
     /// Solve `A x = b` in place (`b` becomes `x`).
     pub fn solve(&self, b: &mut [f64]) {
         assert_eq!(b.len(), self.n);
-        let mut rhs = Mat::from_fn(self.n, 1, |i, _| b[i]);
         let par = Par::Seq;
         let mut scratch = MemBuffer::new(self.llt.solve_in_place_scratch::<f64>(1, par));
+        // In `b` itself, with no copy.
         LltRef::new(&self.llt, &self.values).solve_in_place_with_conj(
             Conj::No,
-            rhs.as_mut(),
+            MatMut::from_column_major_slice_mut(b, self.n, 1),
             par,
             MemStack::new(&mut scratch),
         );
-        for (i, x) in b.iter_mut().enumerate() {
-            *x = rhs[(i, 0)];
-        }
     }
 }
 

@@ -300,6 +300,21 @@ pub fn workloads() -> Vec<Workload> {
             prepare: lst_fill_uterus,
         },
         Workload {
+            name: "lst fill uterus, scene wall",
+            min_runs: 1,
+            what: "the same fill on the bundled scene's own wall (its sessile polyp; about 275k tets), as the default bake fills it",
+            prepare: |root| {
+                let a = uterus_wall(
+                    &scene_params(root)?,
+                    &Default::default(),
+                    crate::solid::lst::TextureType::Layered,
+                )?;
+                Ok(Box::new(move || {
+                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
+                }))
+            },
+        },
+        Workload {
             name: "lst cut kiwi",
             min_runs: 1,
             what: "plane through the filled kiwi: marching tetrahedra and every vertex's colour (seed 000: 78 ms; target <= 5 ms)",
@@ -635,14 +650,17 @@ fn lst_fill_uterus(root: &Path) -> Result<Step> {
 /// the size issue 38's targets were set and measured at (the scene's own
 /// wall is about 275k, the bake and carving workloads' size).
 fn bundled_params(root: &Path) -> Result<crate::scene::uterus::CavityParams> {
+    Ok(crate::scene::uterus::CavityParams {
+        polyps: crate::scene::uterus::demo().polyps,
+        ..scene_params(root)?
+    })
+}
+
+/// The bundled scene's uterus as the scene gives it.
+fn scene_params(root: &Path) -> Result<crate::scene::uterus::CavityParams> {
     let spec = crate::scene::file::load(&root.join("scenes").join("hysteroscopy_myomas.toml"))?;
     match &spec.nodes[0].mesh {
-        crate::scene::file::MeshSpec::UterineCavity(params) => {
-            Ok(crate::scene::uterus::CavityParams {
-                polyps: crate::scene::uterus::demo().polyps,
-                ..params.clone()
-            })
-        }
+        crate::scene::file::MeshSpec::UterineCavity(params) => Ok(params.clone()),
         _ => Err(crate::Error::invalid(
             "the bundled scene's uterus is no longer generated",
         )),

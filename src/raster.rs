@@ -41,8 +41,9 @@ pub fn triangle(
 ///
 /// By truncating casts rather than `ceil` and `floor`: without SSE4.1
 /// (not in the baseline x86-64 target) those are calls into libm, and a
-/// visibility view rasterises some 28k triangles of a few pixels each,
-/// where the calls were a tenth of the rasteriser's time.
+/// visibility view rasterises some 28k triangles of a few pixels each
+/// (on the bunny the calls were 3% of the visibility stage's samples,
+/// the rasteriser 42%).
 fn centres_within(lo: f64, hi: f64, n: usize) -> std::ops::Range<usize> {
     let (first, last) = (lo - 0.5, hi - 0.5);
     // ceil(first), at least 0 (a NaN gives 0, as `ceil` then `max` did).

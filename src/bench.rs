@@ -270,13 +270,10 @@ pub fn workloads() -> Vec<Workload> {
             min_runs: 1,
             what: "lapped solid texture, type 2-b, kiwi-like ellipsoid at about 4,126 tets (seed 000: 39 s; target <= 2 s)",
             prepare: |_| {
-                let a = crate::solid::lst::anchors::kiwi(
+                Ok(lst_fill(crate::solid::lst::anchors::kiwi(
                     crate::solid::lst::TextureType::LayeredTensor,
                     4126,
-                )?;
-                Ok(Box::new(move || {
-                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
-                }))
+                )?))
             },
         },
         Workload {
@@ -284,35 +281,23 @@ pub fn workloads() -> Vec<Workload> {
             min_runs: 1,
             what: "lapped solid texture, type 1-b, layered slab at about 2,734 tets (seed 000: 416 s; target <= 20 s)",
             prepare: |_| {
-                let a = crate::solid::lst::anchors::cake(
+                Ok(lst_fill(crate::solid::lst::anchors::cake(
                     crate::solid::lst::TextureType::Layered,
                     2734,
-                )?;
-                Ok(Box::new(move || {
-                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
-                }))
+                )?))
             },
         },
         Workload {
             name: "lst fill uterus",
             min_runs: 1,
             what: "lapped solid texture, type 1-b, the bundled scene's uterine wall with the generator's stalked polyp at its default resolution (about 190k tets; target <= 4 s)",
-            prepare: lst_fill_uterus,
+            prepare: |root| Ok(lst_fill(wall(&bundled_params(root)?)?)),
         },
         Workload {
             name: "lst fill uterus, scene wall",
             min_runs: 1,
             what: "the same fill on the bundled scene's own wall (its sessile polyp; about 275k tets), as the default bake fills it",
-            prepare: |root| {
-                let a = uterus_wall(
-                    &scene_params(root)?,
-                    &Default::default(),
-                    crate::solid::lst::TextureType::Layered,
-                )?;
-                Ok(Box::new(move || {
-                    crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
-                }))
-            },
+            prepare: |root| Ok(lst_fill(wall(&scene_params(root)?)?)),
         },
         Workload {
             name: "lst cut kiwi",
@@ -634,13 +619,9 @@ fn lst_cut_step(_: &Path) -> Result<Step> {
     }))
 }
 
-/// The bundled scene's uterine wall, tetrahedralised (untimed) and lapped
-/// (1-b, serosa to cavity) as its bake does.
-fn lst_fill_uterus(root: &Path) -> Result<Step> {
-    let a = bundled_wall(root)?;
-    Ok(Box::new(move || {
-        crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop)
-    }))
+/// The lapped solid texture of an anchor (its tets made untimed).
+fn lst_fill(a: crate::solid::lst::anchors::Anchor) -> Step {
+    Box::new(move || crate::solid::lst::fill(&a.tets, &a.options, &Silent).map(drop))
 }
 
 /// The bundled scene's uterus as the uterine workloads take it: the
@@ -678,12 +659,11 @@ fn uterus_surface(params: &crate::scene::uterus::CavityParams) -> Result<crate::
         .map_err(|e| crate::Error::invalid(format!("{}: {}", e.key, e.msg)))
 }
 
-/// The LST anchor of the bundled scene's uterine wall at the default tet
-/// resolution.
-fn bundled_wall(root: &Path) -> Result<crate::solid::lst::anchors::Anchor> {
-    let params = bundled_params(root)?;
+/// The LST anchor (1-b, serosa to cavity) of a uterus's wall at the
+/// default tet resolution, as a bake lays it.
+fn wall(params: &crate::scene::uterus::CavityParams) -> Result<crate::solid::lst::anchors::Anchor> {
     uterus_wall(
-        &params,
+        params,
         &Default::default(),
         crate::solid::lst::TextureType::Layered,
     )
@@ -693,7 +673,7 @@ fn bundled_wall(root: &Path) -> Result<crate::solid::lst::anchors::Anchor> {
 /// serosa to cavity) as its bake does (untimed), cut across its width.
 fn lst_cut_uterus(root: &Path) -> Result<Step> {
     use crate::solid::lst;
-    let a = bundled_wall(root)?;
+    let a = wall(&bundled_params(root)?)?;
     let model = lst::fill(&a.tets, &a.options, &Silent)?;
     let exemplar = lst::anchors::layered_exemplar();
     let interior = lst::LstInterior::new(model.into(), exemplar.into())?;

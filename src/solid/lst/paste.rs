@@ -117,6 +117,7 @@ pub fn paste(
         adjacency: &adjacency,
         fields,
         splotch,
+        marks: MarksPool::default(),
     };
     while !uncovered.is_empty() {
         progress::check(progress)?;
@@ -266,6 +267,42 @@ struct Pasting<'a> {
     adjacency: &'a [[u32; 4]],
     fields: &'a Fields<'a>,
     splotch: &'a TabulatedSplotch<'a>,
+    marks: MarksPool,
+}
+
+/// A growth's marks: per vertex its index among the clump's vertices
+/// (`u32::MAX`: none), per tet whether the clump holds it.
+struct Marks {
+    local: Vec<u32>,
+    in_clump: Vec<bool>,
+}
+
+/// Marks kept between growths, all clear: made anew per patch, the
+/// default wall's half a megabyte of them was a page fault per page
+/// touched (3% of the fill). A pool, not a thread's own: a growth waits
+/// on its alphas' parallel loop, where the thread may start another.
+#[derive(Default)]
+struct MarksPool(std::sync::Mutex<Vec<Marks>>);
+
+impl MarksPool {
+    fn take(&self, mesh: &TetMesh) -> Marks {
+        let pooled = self.0.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        pooled.unwrap_or_else(|| Marks {
+            local: vec![u32::MAX; mesh.num_vertices()],
+            in_clump: vec![false; mesh.num_tets()],
+        })
+    }
+
+    /// `marks`, cleared where `clump`'s growth set them.
+    fn give_back(&self, mut marks: Marks, mesh: &TetMesh, clump: &[usize]) {
+        for &t in clump {
+            marks.in_clump[t] = false;
+            for v in mesh.tets[t] {
+                marks.local[v as usize] = u32::MAX;
+            }
+        }
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(marks);
+    }
 }
 
 impl Pasting<'_> {
@@ -278,10 +315,11 @@ impl Pasting<'_> {
             adjacency,
             fields,
             splotch,
+            ..
         } = *self;
         let (seed_tet, bary) = (site.seed_tet, site.bary);
-        let mut local = vec![u32::MAX; mesh.num_vertices()];
-        let mut in_clump = vec![false; mesh.num_tets()];
+        let mut marks = self.marks.take(mesh);
+        let Marks { local, in_clump } = &mut marks;
         let corners = mesh.corners(seed_tet);
         let centre_obj = (0..4).fold(DVec3::ZERO, |a, k| a + corners[k] * bary[k]);
         let seed_depth = fields.depth.map(|d| {
@@ -343,7 +381,7 @@ impl Pasting<'_> {
                 fields.depth,
                 &rows,
                 &clump,
-                &mut local,
+                local,
                 seed_tet,
                 bary,
                 centre_tex,
@@ -408,6 +446,7 @@ impl Pasting<'_> {
             .iter()
             .map(|&t| mesh.tets[t].map(|v| coords[local[v as usize] as usize]))
             .collect();
+        self.marks.give_back(marks, mesh, &clump);
         let mut angles = Vec::with_capacity(3 * clump.len());
         for (&t, w) in clump.iter().zip(&corners) {
             let c = mesh.corners(t);

@@ -236,7 +236,7 @@ pub fn fill_regions(
         .chain(regions.iter().map(|r| (&r.tets, &r.options)))
         .collect();
     let quiet = progress::CancelOnly(progress);
-    let parts: Vec<Option<(paste::Pasted, FillStats)>> = jobs
+    let mut parts: Vec<Option<(paste::Pasted, FillStats)>> = jobs
         .par_iter()
         .enumerate()
         .map(|(k, &(tets, opts))| {
@@ -281,8 +281,8 @@ pub fn fill_regions(
         patches,
     };
     // The organ alone: its layers are the model's as they are.
-    if let [Some(_)] = parts.as_slice() {
-        let (pasted, stats) = parts.into_iter().flatten().next().expect("one part");
+    if parts.len() == 1 {
+        let (pasted, stats) = parts.pop().flatten().expect("the organ's tets were filled");
         return Ok((
             model(pasted.start, pasted.layers, pasted.patches),
             vec![stats],

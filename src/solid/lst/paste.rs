@@ -61,8 +61,6 @@ const REGROW: usize = 4;
 /// the 95th percentile 18.0-22.0 (18.0-21.7).
 const SETTLED: usize = 50;
 const SETTLED_FROM: usize = 1000;
-/// Rings of tets a regrowth adds before solving again.
-const RINGS_PER_SOLVE: usize = usize::MAX;
 /// Sample points per tet side: barycentric (i, j, k, l) / 8 with
 /// i + j + k + l = 8, 165 points (the paper's count).
 const SAMPLE_DIVISIONS: usize = 8;
@@ -406,9 +404,7 @@ impl Pasting<'_> {
             solves += 1;
             let last = solves > REGROW;
             let before = clump.len();
-            let mut grown = false;
             let mut ring_start = 0;
-            let mut rings = 0;
             loop {
                 let mut added = Vec::new();
                 for &t in &clump[ring_start..] {
@@ -448,16 +444,12 @@ impl Pasting<'_> {
                 if added.is_empty() {
                     break;
                 }
-                grown = true;
                 ring_start = clump.len();
                 clump.extend(added);
-                rings += 1;
-                if rings == RINGS_PER_SOLVE {
-                    break;
-                }
             }
-            let settled = before >= SETTLED_FROM && (clump.len() - before) * SETTLED < before;
-            if !grown || last || settled {
+            let added = clump.len() - before;
+            let settled = before >= SETTLED_FROM && added * SETTLED < before;
+            if added == 0 || last || settled {
                 break;
             }
         }

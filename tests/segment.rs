@@ -11,6 +11,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
+use organtex::mesh::decimate::Hold;
 use organtex::mesh::info::analyse;
 use organtex::progress::Silent;
 use organtex::segment::{self, MeshOptions, Region, ScalarVolume, nifti};
@@ -152,6 +153,7 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
             fill_voids: false,
             faces: None,
             max_handle: None,
+            within_voxels: false,
             smoother: Default::default(),
         };
         let (mesh, report) = segment::mesh(&read, &path, &opts, &Silent).unwrap();
@@ -229,6 +231,7 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
         fill_voids: false,
         faces: None,
         max_handle: None,
+        within_voxels: false,
         smoother: Default::default(),
     };
     let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
@@ -257,9 +260,10 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
     // tetrahedra's slivers and the gyri's thin crests leave caps that only
     // the decimation's cleanup (corner moves, collapses, flips over
     // creases) mends.
-    // As `segment::mesh` decimates: within a quarter-voxel envelope.
-    let envelope = 0.25 * volume.voxel_volume().cbrt();
-    let small =
+    // As `segment::mesh` decimates: each round within a quarter-voxel
+    // envelope.
+    let envelope = Hold::EachRound(0.25 * volume.voxel_volume().cbrt());
+    let (small, _) =
         organtex::mesh::decimate::decimate(&mesh, 50_000, 5, Some(envelope), &Silent).unwrap();
     assert!(small.num_faces() <= 50_000);
     assert_eq!(check_surface(&small, "white matter, 50k faces"), genus);
@@ -274,6 +278,42 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
     assert!(
         worst >= organtex::mesh::decimate::MIN_ANGLE,
         "smallest angle at 50k faces {worst}"
+    );
+}
+
+#[test]
+fn held_within_its_voxels_the_white_matter_keeps_its_gyri_at_50k_faces() {
+    // By default the decimation cuts the thin gyri's crests off, leaving
+    // voxel corners 2.5 voxels from the surface; with every corner held
+    // through it the farthest is about one voxel, and the surface is as
+    // closed, manifold and well shaped as ever.
+    let path = volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz");
+    let volume = ScalarVolume::read(&path).unwrap();
+    let opts = MeshOptions {
+        region: Region::Threshold(127.5),
+        smooth: segment::DEFAULT_SMOOTH,
+        smoother: Default::default(),
+        all_components: false,
+        fill_voids: false,
+        faces: Some(50_000),
+        max_handle: None,
+        within_voxels: true,
+    };
+    let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
+    println!("white matter held within its voxels: {report:?}");
+    assert!(mesh.num_faces() <= 50_000);
+    check_surface(&mesh, "white matter within its voxels");
+    let fit = report.fit;
+    // Of its 313,904 corners a handful lie beyond 0.9 voxel, the farthest
+    // 1.03 voxels away (2.5 without the hold).
+    assert!(fit.far <= 20, "{fit:?}");
+    assert!(fit.farthest.is_none_or(|d| d <= 1.1), "{fit:?}");
+    let ratio = report.volume / report.voxel_volume;
+    assert!((ratio - 1.0).abs() <= 0.01, "volume {ratio}");
+    assert!(
+        report.min_angle >= organtex::mesh::decimate::MIN_ANGLE,
+        "{}",
+        report.min_angle
     );
 }
 
@@ -783,6 +823,7 @@ fn the_windowed_sinc_leaves_a_rounder_ball_than_taubin() {
             fill_voids: false,
             faces: None,
             max_handle: None,
+            within_voxels: false,
         };
         let (mesh, report) = segment::mesh(&volume, Path::new("ball.nii"), &opts, &Silent).unwrap();
         assert_eq!(check_surface(&mesh, "ball"), vec![0]);

@@ -19,7 +19,7 @@ to about 0.17 voxel (the mesh samples' spacing) or understate it by up
 to about 0.35 (the faces' samples); "to voxels" may understate it. Time is wall-clock, each
 tool from the file to its surface.
 
-Usage: tools/compare_mesh.py [--organtex target/release/organtex] [--max-handle MM]
+Usage: tools/compare_mesh.py [--organtex target/release/organtex] [--max-handle MM] [--within-voxels]
                              [--faces 50000] [--json OUT.json]
 """
 
@@ -256,11 +256,13 @@ def skimage_mc(data, level):
     return poly, seconds
 
 
-def organtex_mesh(exe, path, level, faces, out, max_handle=None):
+def organtex_mesh(exe, path, level, faces, out, max_handle=None, within_voxels=False):
     import vtk
 
     start = time.perf_counter()
     handle = ["--max-handle", str(max_handle)] if max_handle else []
+    if within_voxels:
+        handle.append("--within-voxels")
     subprocess.run(
         [exe, "mesh", str(path), "--threshold", str(level), "--faces", str(faces),
          "-o", str(out), "--json", *handle],
@@ -281,6 +283,8 @@ def main():
     ap.add_argument("--json")
     ap.add_argument("--max-handle", type=float,
                     help="also organtex with --max-handle MM (thin handles cut or plugged)")
+    ap.add_argument("--within-voxels", action="store_true",
+                    help="also organtex with --within-voxels (every voxel corner held through the decimation)")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -294,6 +298,11 @@ def main():
                 poly, t = organtex_mesh(args.organtex, path, level, args.faces, Path(tmp) / "h.ply",
                                         args.max_handle)
                 rows.append({"case": name, "tool": f"organtex --max-handle {args.max_handle:g}",
+                             "seconds": t, **measure(poly, voxel_volume, from_world(affine), faces)})
+            if args.within_voxels:
+                poly, t = organtex_mesh(args.organtex, path, level, args.faces, Path(tmp) / "w.ply",
+                                        within_voxels=True)
+                rows.append({"case": name, "tool": "organtex --within-voxels",
                              "seconds": t, **measure(poly, voxel_volume, from_world(affine), faces)})
             poly, t, to_voxels = vtk_pipeline(path, level, args.faces)
             rows.append({"case": name, "tool": "VTK (Slicer's pipeline)", "seconds": t,

@@ -24,6 +24,8 @@ pub struct RegionDialog {
     pub faces: usize,
     pub all_components: bool,
     pub fill_voids: bool,
+    /// Hold the voxel corners through the decimation.
+    pub within_voxels: bool,
     /// Cut or plug handles thinner than `handle` mm.
     pub fix_handles: bool,
     pub handle: f64,
@@ -50,6 +52,7 @@ impl RegionDialog {
             faces: faces.unwrap_or(defaults.faces),
             all_components: defaults.all_components,
             fill_voids: defaults.fill_voids,
+            within_voxels: defaults.within_voxels,
             fix_handles: false,
             handle: 2.0,
             path,
@@ -63,6 +66,7 @@ impl RegionDialog {
             faces: self.faces,
             all_components: self.all_components,
             fill_voids: self.fill_voids,
+            within_voxels: self.within_voxels,
             max_handle: self.fix_handles.then_some(self.handle),
             ..Segmentation::of(self.path.clone(), &self.choice)
         }
@@ -124,6 +128,11 @@ impl RegionDialog {
                     .on_hover_text("default: the largest piece, by voxels");
                 ui.checkbox(&mut self.fill_voids, "fill enclosed voids")
                     .on_hover_text("default: each void is an inner shell of the surface");
+                ui.checkbox(&mut self.within_voxels, "keep thin crests")
+                    .on_hover_text(
+                        "hold every voxel corner within 0.9 voxel through the decimation: \
+                         thin crests such as gyri kept, a rougher surface",
+                    );
                 ui.horizontal(|ui| {
                     let check = ui
                         .checkbox(&mut self.fix_handles, "remove handles thinner than")

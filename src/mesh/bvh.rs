@@ -387,6 +387,15 @@ impl Bvh {
         }
     }
 
+    /// The triangle closest to `q` (its index in the list the tree was
+    /// built from), if one lies within `upper`.
+    pub fn closest_within(&self, q: DVec3, upper: f64) -> Option<u32> {
+        match self.nearest(q, 0.0, upper) {
+            (d2, Some(k)) if d2 <= upper * upper => Some(self.order[k]),
+            _ => None,
+        }
+    }
+
     /// The squared distance `distance_between` takes the root of, and
     /// the triangle (its place in `tris`) at that distance, if one was
     /// within `upper`.

@@ -4,6 +4,7 @@
 use glam::DVec3;
 
 use super::TriMesh;
+use super::envelope::{Envelope, held};
 
 /// The cosine of the smallest angle of triangle (a, b, c), the largest of
 /// its angles' cosines; 1 for a triangle with a corner on another. The
@@ -86,9 +87,16 @@ pub fn worst_after_move(
 /// smoothing of a vertex (Freitag and Ollivier-Gooch 1997) by sampling,
 /// for the caps no flip or collapse mends. A move of a fifth of an edge in
 /// the tangent plane leaves the surface by about that squared times its
-/// curvature. The number made.
-pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
+/// curvature. A move `envelope` does not allow is not made. The number
+/// made.
+pub fn move_corners(
+    mesh: &mut TriMesh,
+    floor: f64,
+    turn: f64,
+    mut envelope: Option<&mut Envelope>,
+) -> usize {
     let faces_at = mesh.faces_at_vertices();
+    let mut after = Vec::new();
     let mut made = 0;
     for f in 0..mesh.num_faces() {
         for v in mesh.triangles[f] {
@@ -126,7 +134,7 @@ pub fn move_corners(mesh: &mut TriMesh, floor: f64, turn: f64) -> usize {
                     }
                 }
             }
-            if best.0 < worst {
+            if best.0 < worst && held(mesh, envelope.as_deref_mut(), ring, v, best.1, &mut after) {
                 mesh.positions[v as usize] = best.1;
                 made += 1;
             }

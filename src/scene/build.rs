@@ -351,6 +351,7 @@ fn segmentation_mesh(
         fill_voids: seg.fill_voids,
         faces: Some(seg.faces),
         max_handle: seg.max_handle,
+        within_voxels: seg.within_voxels,
         smoother: seg.smoother,
     };
     let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, progress)?;

@@ -91,8 +91,7 @@ pub struct Segmentation {
     /// Smoothing iterations.
     #[serde(default = "default_smooth")]
     pub smooth: usize,
-    /// "taubin" (default) or "sinc" (windowed sinc; `organtex mesh
-    /// --smoother`).
+    /// "taubin" (default) or "sinc" (windowed sinc; `mesh --smoother`).
     #[serde(default, skip_serializing_if = "crate::segment::Smoother::is_default")]
     pub smoother: crate::segment::Smoother,
     /// The face budget: a raw voxel surface has hundreds of thousands,
@@ -103,10 +102,12 @@ pub struct Segmentation {
     pub all_components: bool,
     #[serde(default)]
     pub fill_voids: bool,
-    /// Cut or plug handles thinner than this, mm (`organtex mesh
-    /// --max-handle`).
+    /// Cut or plug handles thinner than this, mm (`mesh --max-handle`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_handle: Option<f64>,
+    /// Hold the voxel corners through the decimation (`--within-voxels`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub within_voxels: bool,
 }
 
 fn default_smooth() -> usize {
@@ -142,6 +143,7 @@ impl Segmentation {
             all_components: false,
             fill_voids: false,
             max_handle: None,
+            within_voxels: false,
         }
     }
 

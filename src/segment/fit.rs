@@ -1,25 +1,29 @@
-//! The finished surface drawn back to the voxels it was made from
-//! (issue 40: within a voxel of their boundary). Smoothing cuts a voxel's
-//! corner off a crest, and the decimation holds each round's result only
-//! to the vertices of the surface that round was given (`mesh::envelope`),
-//! so on the MNI brain at 50k faces a corner of the region's voxel
-//! boundary lay 1.06 voxels from the surface, and on the white matter's
-//! thin gyri 2.8.
+//! The surface drawn back to the voxels it was made from (issue 40:
+//! within a voxel of their boundary). Smoothing cuts a voxel's corner off
+//! a crest, and on the MNI white matter's thin gyri a decimation held to
+//! its own surface's vertices left corners of the region's voxel boundary
+//! 2.8 voxels from the surface at 50k faces.
 //!
 //! The corners are what is held: a voxel face's extremes (a convex corner
 //! stands farthest out of a smooth surface, a concave one deepest in it;
 //! even a plane at the best place across a diagonal staircase leaves them
-//! sqrt(3)/2 from it, hence `TOLERANCE`). Each corner farther than `NEAR`
-//! asks that the surface at its nearest point come to `AIM` of it; the
-//! vertices move along their normals by the least squares of those asks
-//! plus a membrane term, so a move spreads over a ring or two rather than
-//! raising a spike (`offsets`), each move kept only where it flips no face,
-//! turns none far, leaves none thinner than the decimation's guard allows
-//! and keeps the vertex within `OFF_VOXELS` of the voxels' faces, else
-//! halved or quartered. In rounds, until no corner is
-//! beyond the tolerance; last of all steps, so nothing after it undoes it.
-//! Distances are in voxels: world units over the cube root of a voxel's
-//! volume, exact for the isotropic voxels of most segmentations.
+//! sqrt(3)/2 from it, hence `TOLERANCE`). They are an envelope
+//! (`mesh::envelope`): the corners within the tolerance stay within it
+//! through every move here and, given to the decimation, through its
+//! collapses, flips and relaxation. Each loose corner (beyond it) asks
+//! (and each held one farther than `NEAR`, so the moves pull both ways)
+//! that the surface at its nearest point come to `AIM` of it; the vertices
+//! move along their normals by the least squares of those asks plus a
+//! membrane term, so a move spreads over a ring or two rather than
+//! raising a spike (`offsets`), each move kept only where it flips no
+//! face, turns none far, leaves none thinner than the decimation's guard
+//! allows, keeps the vertex within `OFF_VOXELS` of the voxels' faces and
+//! lets no held corner go, else halved or quartered. In rounds, until no
+//! corner is loose. `segment::mesh` fits the full surface before the
+//! decimation (so every corner is held from the start) and the decimated
+//! one after it (for the corners its last mends let go). Distances are in
+//! voxels: world units over the cube root of a voxel's volume, exact for
+//! the isotropic voxels of most segmentations.
 
 use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
@@ -29,21 +33,28 @@ use crate::mesh::TriMesh;
 use crate::mesh::bvh::Bvh;
 use crate::mesh::corners::{sharpness, worst_after_move};
 use crate::mesh::decimate::{MAX_TURN, MIN_ANGLE};
+use crate::mesh::envelope::{self, Envelope};
 use crate::progress::{self, Progress};
 use crate::segment::ScalarVolume;
 
 /// The farthest a corner of the voxel boundary may lie from the surface,
-/// voxels: the diagonal staircase's sqrt(3)/2 and a little. A voxel face's
-/// edges and middle lie between its corners, no farther out;
-/// compare_mesh.py, sampling the surface 0.3 voxel apart, reads about
-/// 0.02 more.
+/// voxels: the diagonal staircase's sqrt(3)/2 and a little. Where the
+/// surface bends between a voxel face's corners, the face's middle or
+/// edges can lie farther than they do: on the MNI white matter held
+/// within its voxels at 50k faces (`MeshOptions::within_voxels`), 1.14
+/// voxels against 1.03 (exact distances to the points compare_mesh.py
+/// takes, nine per voxel face).
 pub const TOLERANCE: f64 = 0.9;
 /// Corners farther than this take part in the moves, voxels: those just
 /// inside the tolerance too, so that a move towards a corner on one side
-/// does not push the surface past one on the other unopposed (with only
-/// the corners beyond the tolerance taking part, the surface swung
-/// between them round after round).
+/// does not push the surface towards one on the other unopposed (with
+/// only the loose corners taking part, the white matter's volume grew by
+/// 1.5% at 50k faces, against 0.6%).
 const NEAR: f64 = 0.85;
+/// The corners farther than this at first are the ones the rounds look
+/// at, voxels: a corner nearer would need the moves meant for others to
+/// push the surface a fifth of a voxel from it.
+const CANDIDATE: f64 = 0.7;
 /// Where a corner taking part is brought to, voxels.
 const AIM: f64 = 0.75;
 /// The farthest a vertex moves in a round, voxels: where a vertex's
@@ -56,12 +67,6 @@ const STEP: f64 = 0.5;
 /// dragged the white matter's surface across sulci, 3.5 voxels from any
 /// voxel face.
 const OFF_VOXELS: f64 = 0.6;
-/// The corners farther than this at first are the ones the rounds after
-/// the first look at, voxels: a corner nearer would need the moves meant
-/// for others to push the surface a fifth of a voxel from it, and the
-/// report looks at every corner again (the same figures on the MNI brain
-/// as with every corner looked at, in less time).
-const CANDIDATE: f64 = 0.7;
 /// Rounds of moves at most.
 const ROUNDS: usize = 4;
 
@@ -181,49 +186,78 @@ static NEIGHBOURHOOD: std::sync::LazyLock<Vec<[i64; 3]>> = std::sync::LazyLock::
 
 /// Moves `mesh`'s vertices (world units) so that every corner of
 /// `voxels`' boundary lies within `TOLERANCE` voxels of it, as the module
-/// says, as nearly as the guards allow. Same bytes on any thread count (the
-/// distances are taken in parallel, the moves made in vertex order).
-pub fn fit(mesh: &mut TriMesh, voxels: &Voxels, progress: &dyn Progress) -> Result<Fit> {
-    let points = voxels.corners();
+/// says, as nearly as the guards allow. `held` is the envelope of the
+/// corners on `mesh` (as the decimation left it; none: made here), given
+/// back with the corners the moves brought within carried. Same bytes on
+/// any thread count (the distances are taken in parallel, the moves made
+/// in vertex order).
+pub fn fit(
+    mesh: &mut TriMesh,
+    voxels: &Voxels,
+    held: Option<Envelope>,
+    progress: &dyn Progress,
+) -> Result<(Fit, Envelope)> {
     let voxel = voxels.volume.voxel_volume().cbrt();
     let to_voxel = voxels.volume.to_world.inverse();
     progress.stage("fitting the surface to the voxels", ROUNDS as u64);
-    let (tolerance, near, aim) = (TOLERANCE * voxel, NEAR * voxel, AIM * voxel);
+    let (tolerance, aim) = (TOLERANCE * voxel, AIM * voxel);
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
     let faces_at = mesh.faces_at_vertices();
     let neighbours = super::smooth::vertex_neighbours(mesh);
+    // Built once; the moves only refit it.
+    let mut bvh = Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect());
+    // The corners within the tolerance stay within it (a move towards one
+    // corner may not push the surface off another); the moves are for the
+    // loose ones, those beyond it.
+    let mut held = match held {
+        Some(mut held) => {
+            held.carry_loose(&bvh);
+            held
+        }
+        None => Envelope::holding(mesh.num_faces(), &bvh, voxels.corners(), tolerance),
+    };
+    let loose = |held: &Envelope, bvh: &Bvh| {
+        let points: Vec<DVec3> = held
+            .loose()
+            .iter()
+            .map(|&p| held.points()[p as usize])
+            .collect();
+        farther(bvh, &points, tolerance)
+    };
+    let beyond = |far: &[(DVec3, u32, DVec3)]| {
+        let farthest = far
+            .iter()
+            .map(|(p, _, q)| p.distance(*q) / voxel)
+            .reduce(f64::max);
+        (far.len(), farthest)
+    };
+    let mut after = Vec::new();
     let mut report = Fit {
-        corners: points.len(),
+        corners: held.points().len(),
         far_before: 0,
         far: 0,
         farthest_before: None,
         farthest: None,
         moves: 0,
     };
-    // Built once; the moves only refit it.
-    let mut bvh = Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect());
-    // The later rounds look only at the corners that were farther than
-    // CANDIDATE at first; the last look, for the report, is at every
-    // corner again.
-    let mut far = farther(&bvh, &points, CANDIDATE * voxel);
-    let candidates: Vec<DVec3> = far.iter().map(|(p, _, _)| *p).collect();
-    let beyond = |far: &[(DVec3, u32, DVec3)]| {
-        let distances = far.iter().map(|(p, _, q)| p.distance(*q) / voxel);
-        let beyond: Vec<f64> = distances.filter(|&d| d > TOLERANCE).collect();
-        (beyond.len(), beyond.into_iter().reduce(f64::max))
-    };
-    (report.far_before, report.farthest_before) = beyond(&far);
-    far.retain(|(p, _, q)| p.distance(*q) > near);
+    (report.far_before, report.farthest_before) = beyond(&loose(&held, &bvh));
+    // The corners farther than CANDIDATE at first are the ones the rounds
+    // look at; those farther than NEAR take part in the moves.
+    let candidates: Vec<DVec3> = farther(&bvh, held.points(), CANDIDATE * voxel)
+        .into_iter()
+        .map(|(p, _, _)| p)
+        .collect();
     for round in 0..ROUNDS {
         progress::check(progress)?;
         if round > 0 {
             bvh.refit(|f| mesh.corners(f as usize));
-            far = farther(&bvh, &candidates, near);
+            held.carry_loose(&bvh);
         }
-        if beyond(&far).0 == 0 {
+        if held.loose().is_empty() {
             break;
         }
+        let far = farther(&bvh, &candidates, NEAR * voxel);
         let wanted = offsets(mesh, &neighbours, &far, aim, STEP * voxel);
         let mut made = 0;
         for (v, step) in wanted.iter().enumerate() {
@@ -233,12 +267,14 @@ pub fn fit(mesh: &mut TriMesh, voxels: &Voxels, progress: &dyn Progress) -> Resu
             let p = mesh.positions[v];
             // Nor off the voxels: no farther than OFF_VOXELS from their
             // faces (a vertex already farther may not move).
+            let ring = &faces_at[v];
             let allowed = [1.0, 0.5, 0.25]
                 .into_iter()
                 .map(|share| p + *step * share)
                 .find(|&to| {
                     voxels.within(&to_voxel, to, OFF_VOXELS)
-                        && keeps_shapes(mesh, &faces_at[v], v as u32, to, turn, floor)
+                        && keeps_shapes(mesh, ring, v as u32, to, turn, floor)
+                        && envelope::held(mesh, Some(&mut held), ring, v as u32, to, &mut after)
                 });
             if let Some(to) = allowed {
                 mesh.positions[v] = to;
@@ -252,8 +288,9 @@ pub fn fit(mesh: &mut TriMesh, voxels: &Voxels, progress: &dyn Progress) -> Resu
         }
     }
     bvh.refit(|f| mesh.corners(f as usize));
-    (report.far, report.farthest) = beyond(&farther(&bvh, &points, tolerance));
-    Ok(report)
+    held.carry_loose(&bvh);
+    (report.far, report.farthest) = beyond(&loose(&held, &bvh));
+    Ok((report, held))
 }
 
 /// Those of `points` farther than `distance` from the triangles of `bvh`,
@@ -435,6 +472,7 @@ mod tests {
             fill_voids: false,
             faces: Some(FACES),
             max_handle: None,
+            within_voxels: false,
         };
         let (surface, report) = mesh(&volume, Path::new("finned.nii"), &opts, &Silent).unwrap();
         let fit = report.fit;

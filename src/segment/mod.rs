@@ -31,6 +31,7 @@ use glam::{DAffine3, DVec3};
 
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
+use crate::mesh::decimate::{Hold, decimate};
 use crate::progress::Progress;
 
 /// A scalar volume: one value per voxel, x fastest, and the map from voxel
@@ -184,6 +185,11 @@ pub struct MeshOptions {
     pub faces: Option<usize>,
     /// Cut or plug the region's handles thinner than this, mm (`handles`).
     pub max_handle: Option<f64>,
+    /// Decimate with every corner of the region's voxel boundary held
+    /// within `fit::TOLERANCE` of the surface (`Hold::Throughout`), not
+    /// only each round's surface within `ENVELOPE_VOXELS`: thin crests
+    /// (gyri) kept at the face budget, at the cost of smoothness.
+    pub within_voxels: bool,
 }
 
 /// Smoothing iterations by default (`MeshOptions::smooth`). Marching
@@ -220,11 +226,11 @@ impl Smoother {
 
 /// Tangential relaxation rounds after decimating.
 const RELAX_ROUNDS: usize = 5;
-/// The decimation's envelope, voxels: each round keeps the vertices of the
-/// surface it was given within this of its result (`mesh::envelope`).
-/// Without it the white matter's thin gyri went whole at 50k faces, 6.5
-/// voxels from the decimated surface; with a quarter voxel 2.6 (and 1.2
-/// the other way, against 2.7), at about 3 s more.
+/// The decimation's envelope by default, voxels: each round keeps the
+/// vertices of the surface it was given within this of its result
+/// (`Hold::EachRound`). Without it the white matter's thin gyri went whole
+/// at 50k faces, 6.5 voxels from the decimated surface; with a quarter
+/// voxel 2.6 (and 1.2 the other way, against 2.7), at about 3 s more.
 const ENVELOPE_VOXELS: f64 = 0.25;
 
 /// What `mesh` measured.
@@ -349,20 +355,28 @@ pub fn mesh(
             t.swap(1, 2);
         }
     }
-    // In world units, where the angles the decimation keeps are the ones
-    // a user measures.
-    if let Some(budget) = opts.faces.filter(|&b| b < mesh.num_faces()) {
-        let envelope = ENVELOPE_VOXELS * volume.voxel_volume().cbrt();
-        mesh =
-            crate::mesh::decimate::decimate(&mesh, budget, RELAX_ROUNDS, Some(envelope), progress)
-                .map_err(|e| e.in_file(name))?;
-    }
-    // Last, so no step after it moves the surface off the voxels again.
-    let held = fit::Voxels {
+    // Decimated in world units, where the angles the decimation keeps are
+    // the ones a user measures; last, drawn to the voxels, so no step
+    // after it moves the surface off them again. Held within the voxels,
+    // the surface is drawn to them first too, so every corner is held
+    // from the start (`fit`).
+    let voxel_corners = fit::Voxels {
         volume,
         inside: &kept,
     };
-    let fit = fit::fit(&mut mesh, &held, progress)?;
+    let mut held = None;
+    if let Some(budget) = opts.faces.filter(|&b| b < mesh.num_faces()) {
+        let voxel = volume.voxel_volume().cbrt();
+        let hold = if opts.within_voxels {
+            let (_, envelope) = fit::fit(&mut mesh, &voxel_corners, None, progress)?;
+            Hold::Throughout(envelope)
+        } else {
+            Hold::EachRound(ENVELOPE_VOXELS * voxel)
+        };
+        (mesh, held) = decimate(&mesh, budget, RELAX_ROUNDS, Some(hold), progress)
+            .map_err(|e| e.in_file(name))?;
+    }
+    let (fit, _) = fit::fit(&mut mesh, &voxel_corners, held, progress)?;
     let report = MeshReport {
         region_voxels,
         voxels,

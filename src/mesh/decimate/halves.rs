@@ -37,15 +37,17 @@ struct Half {
     mesh: TriMesh,
     whole: Vec<u32>,
     on_cut: Vec<bool>,
+    /// The envelope on its faces (the points numbered as in the whole's).
+    envelope: Option<Envelope>,
 }
 
 /// The collapse state of `mesh` (closed, manifold) after its two halves'
-/// collapses towards `faces`, and its envelope (`tolerance`), for
+/// collapses towards `faces`, and its `envelope` as they left it, for
 /// `collapse` to go on with.
 pub(super) fn collapse_halves(
     mesh: &TriMesh,
     faces: usize,
-    tolerance: Option<f64>,
+    envelope: Option<Envelope>,
     progress: &dyn Progress,
 ) -> Result<(State, Option<Envelope>)> {
     let sides = cut(mesh);
@@ -60,25 +62,30 @@ pub(super) fn collapse_halves(
             .filter(|&f| sides[f] == side)
             .map(FaceId::from)
             .collect();
+        let envelope = envelope.as_ref().map(|e| e.restricted(&faces));
         let (mesh, whole) = crate::mesh::submesh::extract(mesh, &faces);
         let on_cut = whole.iter().map(|&v| sides_of[v as usize] == 3).collect();
         Half {
             mesh,
             whole,
             on_cut,
+            envelope,
         }
     };
-    let run = |h: &Half| -> Result<(State, Option<Envelope>)> {
+    let run = |h: Half| -> Result<(Half, State, Option<Envelope>)> {
         let share = faces as f64 * h.mesh.num_faces() as f64 / mesh.num_faces() as f64;
         let mut s = State::new(&h.mesh);
-        let mut envelope = tolerance.map(|t| Envelope::new(&h.mesh, t));
+        let mut h = h;
+        let mut envelope = h.envelope.take();
         let budget = (share * HALF_MARGIN) as usize;
         collapse(&mut s, envelope.as_mut(), budget, Some(&h.on_cut), progress)?;
-        Ok((s, envelope))
+        Ok((h, s, envelope))
     };
     let (a, b) = (half(false), half(true));
-    let (done_a, done_b) = rayon::join(|| run(&a), || run(&b));
-    let halves = [(a, done_a?), (b, done_b?)];
+    let tolerance = envelope.as_ref().map(Envelope::tolerance);
+    let points = envelope.map(Envelope::into_points);
+    let (done_a, done_b) = rayon::join(|| run(a), || run(b));
+    let halves = [done_a?, done_b?];
 
     let n = mesh.num_vertices();
     let mut whole = State {
@@ -90,7 +97,7 @@ pub(super) fn collapse_halves(
         removed: vec![true; n],
     };
     let mut carried = Vec::new();
-    for (h, (s, envelope)) in &halves {
+    for (h, s, envelope) in &halves {
         for (v, &w) in h.whole.iter().enumerate() {
             if !s.removed[v] {
                 let w = w as usize;
@@ -107,18 +114,14 @@ pub(super) fn collapse_halves(
             }
             whole.triangles.push(t);
             if let Some(envelope) = envelope {
-                carried.push(
-                    envelope
-                        .carried(f)
-                        .iter()
-                        .map(|&p| h.whole[p as usize])
-                        .collect(),
-                );
+                carried.push(envelope.carried(f).to_vec());
             }
         }
     }
     whole.alive = vec![true; whole.triangles.len()];
-    let envelope = tolerance.map(|t| Envelope::from_parts(mesh.positions.clone(), carried, t));
+    let envelope = points
+        .zip(tolerance)
+        .map(|(points, t)| Envelope::from_parts(points, carried, t));
     Ok((whole, envelope))
 }
 
@@ -157,7 +160,7 @@ fn cut(mesh: &TriMesh) -> Vec<bool> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::decimate;
+    use super::super::{Hold, decimate};
     use crate::mesh::info::analyse;
     use crate::mesh::shapes;
     use crate::progress::Silent;
@@ -171,7 +174,11 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| decimate(&mesh, 8000, 2, Some(0.002), &Silent).unwrap())
+                .install(|| {
+                    decimate(&mesh, 8000, 2, Some(Hold::EachRound(0.002)), &Silent)
+                        .unwrap()
+                        .0
+                })
         };
         let (one, two) = (on(1), on(2));
         assert_eq!(one.positions, two.positions);

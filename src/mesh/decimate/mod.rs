@@ -15,13 +15,16 @@ use std::cmp::Reverse;
 use glam::{DMat3, DVec3};
 
 use super::corners::{keeps_facing, move_corners, sharpness};
-use super::envelope::Envelope;
+use super::envelope::{Envelope, held};
 use crate::error::{Error, Result};
 use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
 
+mod flips;
 mod halves;
 mod tips;
+
+pub use flips::flip_edges;
 
 /// No collapse may leave the faces it moves with an angle below this
 /// (degrees), or below the smallest angle they had, if that is less.
@@ -289,6 +292,34 @@ impl State {
         }
     }
 
+    /// Whether `envelope` (if any) allows the collapse of (a, b) to `to`
+    /// (`Envelope::allows`), committed if so.
+    fn held(
+        &self,
+        envelope: Option<&mut Envelope>,
+        (a, b, to): (u32, u32, DVec3),
+        around: &mut Vec<u32>,
+        after: &mut Vec<(u32, [DVec3; 3])>,
+    ) -> bool {
+        let Some(envelope) = envelope else {
+            return true;
+        };
+        self.faces_round(a, b, to, around, after);
+        let ok = envelope.allows(around, after);
+        if ok {
+            envelope.commit(around);
+        }
+        ok
+    }
+
+    /// The faces left, vertices in order of use, and `envelope` on them.
+    fn into_held_mesh(self, envelope: Option<&mut Envelope>) -> TriMesh {
+        if let Some(envelope) = envelope {
+            envelope.keep_faces(&self.alive);
+        }
+        self.into_mesh()
+    }
+
     /// Each live edge once, as (smaller end, larger end), on a closed
     /// surface; an open one's boundary edges that run down are left out
     /// (a half's, whose ends are locked).
@@ -368,9 +399,8 @@ impl State {
 }
 
 /// Collapse edges of `mesh` (closed and manifold) until it has at most
-/// `faces` faces, each round's collapses keeping that round's surface's
-/// vertices within `envelope` of the result (`envelope::Envelope`; the last
-/// round without, so the budget is reached); then `relax` rounds of edge
+/// `faces` faces, within the envelope `hold` asks for (`Hold`; the last
+/// round of collapses without, so the budget is reached); then `relax` rounds of edge
 /// flips and tangential relaxation. Where the collapses get stuck above the
 /// budget (every candidate would make an angle under `MIN_ANGLE`), a round
 /// of flips and relaxation evens the faces out and the collapses go on, up
@@ -380,27 +410,47 @@ impl State {
 /// before their guard has mended every face it was given) are mended
 /// where a corner's move, a collapse or a flip can (a best effort: the
 /// result's smallest angle is the caller's to report). Deterministic: the same bytes on any thread
-/// count (`halves`; equal costs pop last in, first out, `Queue`). The
-/// error names why the budget was not reached.
+/// count (`halves`; equal costs pop last in, first out, `Queue`). Gives
+/// back a `Hold::Throughout` envelope on the result (none if the last
+/// round ran). The error names why the budget was not reached.
 pub fn decimate(
     mesh: &TriMesh,
     faces: usize,
     relax: usize,
-    envelope: Option<f64>,
+    hold: Option<Hold>,
     progress: &dyn Progress,
-) -> Result<TriMesh> {
+) -> Result<(TriMesh, Option<Envelope>)> {
     progress.stage("decimating", mesh.num_faces().saturating_sub(faces) as u64);
     let mut out = mesh.clone();
+    let (each_round, mut envelope) = match hold {
+        Some(Hold::EachRound(tolerance)) => (Some(tolerance), None),
+        Some(Hold::Throughout(envelope)) => (None, Some(envelope)),
+        None => (None, None),
+    };
+    // The tallest tip flattened: where an envelope holds, it decides.
+    let tip_height = match each_round {
+        Some(tolerance) => TIP_HEIGHT * tolerance,
+        None => f64::INFINITY,
+    };
     for round in 0..ROUNDS {
+        // No envelope in the last round, so it never stops a budget the
+        // guards alone would reach.
+        if round + 1 == ROUNDS {
+            envelope = None;
+        }
         // Even out the thin faces first, so the angle guard does not hold
         // collapses back around them.
-        flip_edges(&mut out, 3, false);
-        relax_tangentially(&mut out, 1);
-        // The envelope round this round's surface (`envelope`), and none
-        // in the last round, so it never stops a budget the guards alone
-        // would reach.
-        let tolerance = envelope.filter(|_| round + 1 < ROUNDS);
-        out = collapse_to(&out, faces, tolerance, progress)?;
+        flip_edges(&mut out, 3, false, envelope.as_mut());
+        relax_tangentially(&mut out, 1, envelope.as_mut());
+        let this_round = match each_round {
+            Some(tolerance) if round + 1 < ROUNDS => Some(Envelope::new(&out, tolerance)),
+            _ => envelope.take(),
+        };
+        let kept;
+        (out, kept) = collapse_to(&out, faces, this_round, progress)?;
+        if each_round.is_none() {
+            envelope = kept;
+        }
         if out.num_faces() <= faces {
             break;
         }
@@ -413,21 +463,25 @@ pub fn decimate(
         )));
     }
     for _ in 0..relax {
-        flip_edges(&mut out, 1, false);
-        relax_tangentially(&mut out, 1);
+        flip_edges(&mut out, 1, false, envelope.as_mut());
+        relax_tangentially(&mut out, 1, envelope.as_mut());
     }
-    if collapse_short_edges(&mut out)
-        + tips::flatten_tips(&mut out, TIP_HEIGHT * envelope.unwrap_or(f64::INFINITY))
+    if collapse_short_edges(&mut out, envelope.as_mut())
+        + tips::flatten_tips(&mut out, tip_height, envelope.as_mut())
         > 0
     {
-        flip_edges(&mut out, 1, false);
-        relax_tangentially(&mut out, 1);
+        flip_edges(&mut out, 1, false, envelope.as_mut());
+        relax_tangentially(&mut out, 1, envelope.as_mut());
     }
     // The faces still under MIN_ANGLE, which the budget left: their
     // corners moved, needles collapsed, caps flipped over creases, each
     // step only raising the worst angle where it acts, while there are
     // any (the flips and relaxation go on evening the rest out, on every
-    // face, for nothing).
+    // face, for nothing). Where the envelope allows no mend, the angles
+    // come first: a round mends with it lax, the points it leaves beyond
+    // the tolerance coming loose (the caller may draw the surface back to
+    // them: `segment::fit`).
+    let mut lax = false;
     for _ in 0..CLEANUP_ROUNDS {
         let floor = cleanup_floor();
         if (0..out.num_faces()).all(|f| {
@@ -436,24 +490,39 @@ pub fn decimate(
         }) {
             break;
         }
-        let changed = move_corners(&mut out, floor, MAX_TURN.to_radians().cos())
-            + collapse_needles(&mut out)
-            + flip_edges(&mut out, 2, true);
-        relax_tangentially(&mut out, 1);
+        if let Some(envelope) = envelope.as_mut() {
+            envelope.set_strict(!lax);
+        }
+        let changed = move_corners(
+            &mut out,
+            floor,
+            MAX_TURN.to_radians().cos(),
+            envelope.as_mut(),
+        ) + collapse_needles(&mut out, envelope.as_mut());
+        if let Some(envelope) = envelope.as_mut() {
+            envelope.set_strict(true);
+        }
+        let changed = changed + flip_edges(&mut out, 2, true, envelope.as_mut());
+        relax_tangentially(&mut out, 1, envelope.as_mut());
         if changed == 0 {
-            break;
+            if lax || envelope.is_none() {
+                break;
+            }
+            lax = true;
+        } else {
+            lax = false;
         }
     }
-    Ok(out)
+    Ok((out, envelope))
 }
 
 /// Rounds of collapses, each after a round of flips and relaxation.
 const ROUNDS: usize = 6;
-/// The tallest tip flattened (`tips`), in envelope tolerances: on the MNI
-/// white matter at 50k faces, half a voxel takes its mean curvature's
-/// spread from 0.48 to 0.43 and leaves its distances to the voxels as they
-/// were; a voxel, to 0.39 with 3.6 voxels from them (2.9 before); no bound,
-/// 0.37 with 4.1.
+/// The tallest tip flattened (`tips`), in `Hold::EachRound` tolerances:
+/// on the MNI white matter at 50k faces, half a voxel takes its mean
+/// curvature's spread from 0.48 to 0.43 and leaves its distances to the
+/// voxels as they were; a voxel, to 0.39 with 3.6 voxels from them (2.9
+/// before); no bound, 0.37 with 4.1.
 const TIP_HEIGHT: f64 = 2.0;
 /// Rounds of corner moves, collapses and flips of the faces under the
 /// cleanup's floor at the end, until a round changes nothing (on the MNI
@@ -469,20 +538,35 @@ fn cleanup_floor() -> f64 {
     (MIN_ANGLE + CLEANUP_MARGIN).to_radians().cos()
 }
 
+/// What the decimation keeps near the surface (`mesh::envelope`).
+pub enum Hold {
+    /// Each round of collapses (but the last) keeps the vertices of the
+    /// surface it was given within this distance of its result; the flips
+    /// and relaxation between and after the rounds answer to nothing.
+    EachRound(f64),
+    /// These points within the envelope's tolerance through every step
+    /// but the last round of collapses (or, if the budget needs that
+    /// round, through none after it) and the cleanup's mends that nothing
+    /// else allows: what the surface was made from, e.g. a region's voxel
+    /// corners. `decimate` gives it back on the result.
+    Throughout(Envelope),
+}
+
 /// Collapses until `faces` or until none is allowed.
 fn collapse_to(
     mesh: &TriMesh,
     faces: usize,
-    tolerance: Option<f64>,
+    envelope: Option<Envelope>,
     progress: &dyn Progress,
-) -> Result<TriMesh> {
+) -> Result<(TriMesh, Option<Envelope>)> {
     let (mut s, mut envelope) = if mesh.num_faces() >= halves::SPLIT_FACES {
-        halves::collapse_halves(mesh, faces, tolerance, progress)?
+        halves::collapse_halves(mesh, faces, envelope, progress)?
     } else {
-        (State::new(mesh), tolerance.map(|t| Envelope::new(mesh, t)))
+        (State::new(mesh), envelope)
     };
     collapse(&mut s, envelope.as_mut(), faces, None, progress)?;
-    Ok(s.into_mesh())
+    let out = s.into_held_mesh(envelope.as_mut());
+    Ok((out, envelope))
 }
 
 /// The greedy collapses on `s`, cheapest first, until it has `faces` live
@@ -528,12 +612,8 @@ fn collapse(
         {
             continue;
         }
-        if let Some(envelope) = envelope.as_mut() {
-            s.faces_round(a, b, to, &mut around, &mut after);
-            if !envelope.allows(&around, &after) {
-                continue;
-            }
-            envelope.commit(&around);
+        if !s.held(envelope.as_deref_mut(), (a, b, to), &mut around, &mut after) {
+            continue;
         }
         s.collapse(a, b, to);
         live -= 2;
@@ -566,8 +646,9 @@ fn collapse(
 /// curvature tens of times the rest's (on the MNI white matter at 50k
 /// faces the spread of the mean curvature falls from 1.48 to 0.67). The
 /// number made.
-fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
+fn collapse_short_edges(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>) -> usize {
     let mut s = State::new(mesh);
+    let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut lengths: Vec<(f64, u32, u32)> = s
         .live_edges()
         .map(|(a, b)| {
@@ -599,6 +680,7 @@ fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
         }
         let to = s.candidate(a, b).to;
         if matches!(s.shapes(a, b, to, 0.0, &mut scratch), Some((old, new)) if new <= old.max(floor))
+            && s.held(envelope.as_deref_mut(), (a, b, to), &mut around, &mut after)
         {
             s.collapse(a, b, to);
             vertices -= 1;
@@ -606,7 +688,7 @@ fn collapse_short_edges(mesh: &mut TriMesh) -> usize {
         }
     }
     if made > 0 {
-        *mesh = s.into_mesh();
+        *mesh = s.into_held_mesh(envelope);
     }
     made
 }
@@ -625,10 +707,11 @@ const SHORT_EDGE_ANGLE: f64 = 5.0;
 /// keeps the surface manifold, turns no face far and makes the worst angle
 /// round the edge strictly larger: what the budget stopped the greedy
 /// collapses short of. The number made.
-fn collapse_needles(mesh: &mut TriMesh) -> usize {
+fn collapse_needles(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>) -> usize {
     let floor = cleanup_floor();
     let turn = MAX_TURN.to_radians().cos();
     let mut s = State::new(mesh);
+    let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut scratch = [Vec::new(), Vec::new()];
     let mut vertices = mesh.num_vertices();
     let mut made = 0;
@@ -647,14 +730,16 @@ fn collapse_needles(mesh: &mut TriMesh) -> usize {
                 (new < old).then_some((new, a, b, to))
             })
             .min_by(|x, y| x.0.total_cmp(&y.0));
-        if let Some((_, a, b, to)) = best {
+        if let Some((_, a, b, to)) = best
+            && s.held(envelope.as_deref_mut(), (a, b, to), &mut around, &mut after)
+        {
             s.collapse(a, b, to);
             vertices -= 1;
             made += 1;
         }
     }
     if made > 0 {
-        *mesh = s.into_mesh();
+        *mesh = s.into_held_mesh(envelope);
     }
     made
 }
@@ -664,8 +749,9 @@ fn collapse_needles(mesh: &mut TriMesh) -> usize {
 /// the move dropped), where that flips no face round it and leaves the
 /// smallest angle among them no smaller. Evens the faces' shapes; the surface
 /// stays where it was to second order.
-fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
+fn relax_tangentially(mesh: &mut TriMesh, rounds: usize, mut envelope: Option<&mut Envelope>) {
     let faces_at = mesh.faces_at_vertices();
+    let mut after = Vec::new();
     for _ in 0..rounds {
         for (v, ring) in faces_at.iter().enumerate() {
             let mut normal = DVec3::ZERO;
@@ -711,180 +797,21 @@ fn relax_tangentially(mesh: &mut TriMesh, rounds: usize) {
                 worst.1 = worst.1.max(sharpness(new[0], new[1], new[2]));
             }
             let ok = !flipped && worst.1 <= worst.0;
-            if ok {
+            if ok
+                && held(
+                    mesh,
+                    envelope.as_deref_mut(),
+                    ring,
+                    v as u32,
+                    to,
+                    &mut after,
+                )
+            {
                 mesh.positions[v] = to;
             }
         }
     }
 }
-
-/// Passes of edge flips: an edge between two faces that meet at no more
-/// than `MAX_CREASE` degrees is flipped when that raises the smaller of the
-/// two faces' smallest angles (Delaunay's criterion on a surface), no face
-/// turns over and the new edge is not already one. Flipping an almost flat
-/// pair moves the surface by little; it is how remeshers even out the
-/// thin faces that collapses leave. With `steep`, a pair with an angle
-/// under the cleanup's floor may flip over a steeper crease where that
-/// moves the surface by little (`FLIP_MOVE`). The number of flips made.
-pub fn flip_edges(mesh: &mut TriMesh, passes: usize, steep: bool) -> usize {
-    let crease = MAX_CREASE.to_radians().cos();
-    let floor = cleanup_floor();
-    let mut flips = 0;
-    for _ in 0..passes {
-        // Half-edge `h` is corner h % 3 of face h / 3 running to the next
-        // corner (`edges::halfedge_endpoints`). Each pass visits the edges
-        // in order of their ends; a flip renames its edge to the new
-        // diagonal (not visited again this pass) and moves the half-edges
-        // of two others between the faces, so the arrays follow it:
-        // `opposite` and `edge_of` per half-edge, `half_of` per edge.
-        let table = super::edges::EdgeTable::new(&mesh.triangles);
-        let n = mesh.triangles.len() * 3;
-        let mut opposite = vec![u32::MAX; n];
-        let mut edge_of = vec![0u32; n];
-        let mut half_of = Vec::with_capacity(table.num_edges());
-        for (e, hs) in table.iter() {
-            for h in hs {
-                edge_of[h.idx()] = e.idx() as u32;
-            }
-            if let [g, h] = *hs {
-                opposite[g.idx()] = h.idx() as u32;
-                opposite[h.idx()] = g.idx() as u32;
-            }
-            half_of.push(hs[0].idx() as u32);
-        }
-        drop(table);
-        let mut made = 0;
-        for e in 0..half_of.len() {
-            let h = half_of[e] as usize;
-            let g = opposite[h];
-            if g == u32::MAX {
-                continue;
-            }
-            let g = g as usize;
-            let (f0, k) = (h / 3, h % 3);
-            let (f1, l) = (g / 3, g % 3);
-            // f0 runs a -> b -> c, f1 runs b -> a -> d.
-            let t0 = mesh.triangles[f0];
-            let (a, b, c) = (t0[k], t0[(k + 1) % 3], t0[(k + 2) % 3]);
-            let d = mesh.triangles[f1][(l + 2) % 3];
-            if c == d || joined(mesh, &opposite, 3 * f0 + (k + 2) % 3, d) {
-                continue;
-            }
-            let p = |v: u32| mesh.positions[v as usize];
-            let normal = |x: u32, y: u32, z: u32| (p(y) - p(x)).cross(p(z) - p(x));
-            let (n0, n1) = (normal(a, b, c), normal(b, a, d));
-            if n0.length_squared() == 0.0 || n1.length_squared() == 0.0 {
-                continue;
-            }
-            let before = sharpness(p(a), p(b), p(c)).max(sharpness(p(b), p(a), p(d)));
-            // Across a steeper crease only a pair with an angle under the
-            // cleanup's floor, and only where the two diagonals nearly meet: the
-            // surface moves by the tetrahedron (a, b, c, d) between the
-            // pair and the flipped pair, as thick as the diagonals' lines
-            // are apart.
-            if n0.normalize().dot(n1.normalize()) < crease {
-                let across = (p(b) - p(a)).cross(p(d) - p(c));
-                let apart = (p(c) - p(a)).dot(across).abs() / across.length();
-                // False where the diagonals are parallel (NaN).
-                let moves_little = apart <= FLIP_MOVE * p(a).distance(p(b));
-                // A pair folded onto itself is flat too, but a flip there
-                // would turn the smaller face over.
-                let folded = n0.normalize().dot(n1.normalize()) <= MAX_STEEP_CREASE_COS;
-                if !steep || before <= floor || !moves_little || folded {
-                    continue;
-                }
-            }
-            let after = sharpness(p(c), p(a), p(d)).max(sharpness(p(d), p(b), p(c)));
-            let up = n0 + n1;
-            if after >= before - 1e-12
-                || normal(c, a, d).dot(up) <= 0.0
-                || normal(d, b, c).dot(up) <= 0.0
-            {
-                continue;
-            }
-            // The four outer half-edges, before: b -> c, c -> a in f0;
-            // a -> d, d -> b in f1.
-            let outer = [
-                3 * f0 + (k + 2) % 3,
-                3 * f1 + (l + 1) % 3,
-                3 * f1 + (l + 2) % 3,
-                3 * f0 + (k + 1) % 3,
-            ];
-            let (outer_opposite, outer_edge) =
-                (outer.map(|h| opposite[h]), outer.map(|h| edge_of[h]));
-            mesh.triangles[f0] = [c, a, d];
-            mesh.triangles[f1] = [d, b, c];
-            // After: f0's c -> a, a -> d; f1's d -> b, b -> c; and the
-            // new diagonal d -> c, c -> d, which takes edge e's name.
-            let slots = [3 * f0, 3 * f0 + 1, 3 * f1, 3 * f1 + 1];
-            for ((&h, o), edge) in slots.iter().zip(outer_opposite).zip(outer_edge) {
-                opposite[h] = o;
-                // A boundary edge (or one of three faces) has no opposite.
-                if o != u32::MAX {
-                    opposite[o as usize] = h as u32;
-                }
-                edge_of[h] = edge;
-                half_of[edge as usize] = h as u32;
-            }
-            let (x, y) = (3 * f0 + 2, 3 * f1 + 2);
-            opposite[x] = y as u32;
-            opposite[y] = x as u32;
-            edge_of[x] = e as u32;
-            edge_of[y] = e as u32;
-            half_of[e] = x as u32;
-            made += 1;
-        }
-        flips += made;
-        if made == 0 {
-            break;
-        }
-    }
-    flips
-}
-
-/// Whether vertex `d` is a neighbour of the vertex half-edge `start`
-/// leaves: turning round it by the opposites one way, and where that meets
-/// a boundary, the other way too.
-fn joined(mesh: &TriMesh, opposite: &[u32], start: usize, d: u32) -> bool {
-    let corner = |h: usize, step: usize| mesh.triangles[h / 3][(h % 3 + step) % 3];
-    let mut h = start;
-    loop {
-        if corner(h, 1) == d {
-            return true;
-        }
-        // The next half-edge out of the same vertex: after the opposite.
-        let Some(o) = opposite.get(h).copied().filter(|&o| o != u32::MAX) else {
-            break;
-        };
-        h = 3 * (o as usize / 3) + (o as usize % 3 + 1) % 3;
-        if h == start {
-            return false;
-        }
-    }
-    h = start;
-    loop {
-        // The half-edge into the vertex before `h`, from a neighbour.
-        let into = 3 * (h / 3) + (h % 3 + 2) % 3;
-        if corner(into, 0) == d {
-            return true;
-        }
-        match opposite[into] {
-            u32::MAX => return false,
-            o => h = o as usize,
-        }
-    }
-}
-
-/// The largest angle (degrees) between two faces whose edge may flip
-/// (unless, in the cleanup, one has an angle under its floor: FLIP_MOVE).
-const MAX_CREASE: f64 = 15.0;
-/// How far a flip across a steeper crease may move the surface, as a
-/// share of the flipped edge's length: a cap (a face with an angle near
-/// 180 degrees) is flat against its long edge, so flipping that edge moves
-/// the surface by little whatever the crease.
-const FLIP_MOVE: f64 = 0.1;
-/// The cosine of the steepest crease (120 degrees) such a flip may cross.
-const MAX_STEEP_CREASE_COS: f64 = -0.5;
 
 #[cfg(test)]
 mod tests {
@@ -911,7 +838,9 @@ mod tests {
             (shapes::torus(1.0, 0.35, 96, 36), 1),
         ] {
             let before = mesh.signed_volume();
-            let out = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent).unwrap();
+            let out = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent)
+                .unwrap()
+                .0;
             assert!(out.num_faces() <= mesh.num_faces() / 8);
             assert_eq!(genus_closed_outward(&out), vec![genus]);
             let volume = out.signed_volume() / before;
@@ -924,7 +853,9 @@ mod tests {
                 .fold(180.0, f64::min);
             assert!(worst >= MIN_ANGLE, "smallest angle {worst}");
             // Same bytes again.
-            let again = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent).unwrap();
+            let again = decimate(&mesh, mesh.num_faces() / 8, 5, None, &Silent)
+                .unwrap()
+                .0;
             assert_eq!(again.positions, out.positions);
         }
     }
@@ -948,10 +879,17 @@ mod tests {
         let mesh = shapes::icosphere(4);
         let budget = mesh.num_faces() / 16;
         let tolerance = 0.005;
-        let free = collapse_to(&mesh, budget, None, &Silent).unwrap();
+        let free = collapse_to(&mesh, budget, None, &Silent).unwrap().0;
         let far = farthest(mesh.positions.iter(), &free);
         assert!(far > 3.0 * tolerance, "{far}");
-        let kept = collapse_to(&mesh, budget, Some(tolerance), &Silent).unwrap();
+        let kept = collapse_to(
+            &mesh,
+            budget,
+            Some(Envelope::new(&mesh, tolerance)),
+            &Silent,
+        )
+        .unwrap()
+        .0;
         let far = farthest(mesh.positions.iter(), &kept);
         assert!(far <= tolerance, "{far}");
         // Stopped by the envelope short of the budget, not at once.
@@ -962,7 +900,9 @@ mod tests {
         );
         // `decimate` meets the budget all the same (its last round has no
         // envelope).
-        let met = decimate(&mesh, budget, 0, Some(tolerance), &Silent).unwrap();
+        let met = decimate(&mesh, budget, 0, Some(Hold::EachRound(tolerance)), &Silent)
+            .unwrap()
+            .0;
         assert!(met.num_faces() <= budget, "{}", met.num_faces());
     }
 

@@ -14,6 +14,7 @@ use glam::DVec3;
 use super::{State, cleanup_floor};
 use crate::mesh::TriMesh;
 use crate::mesh::closest::closest_point;
+use crate::mesh::envelope::Envelope;
 
 /// The most faces a tip has.
 const TIP_FACES: usize = 4;
@@ -28,9 +29,14 @@ const TIP_FLATNESS: f64 = 0.7;
 /// more than `height` off the faces left, and the worst angle of the faces
 /// moved is at least the cleanup's floor or the worst among the faces
 /// round the edge before. The number collapsed.
-pub(super) fn flatten_tips(mesh: &mut TriMesh, height: f64) -> usize {
+pub(super) fn flatten_tips(
+    mesh: &mut TriMesh,
+    height: f64,
+    mut envelope: Option<&mut Envelope>,
+) -> usize {
     let floor = cleanup_floor();
     let mut s = State::new(mesh);
+    let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut scratch = [Vec::new(), Vec::new()];
     let mut ring = Vec::new();
     let mut vertices = mesh.num_vertices();
@@ -75,14 +81,16 @@ pub(super) fn flatten_tips(mesh: &mut TriMesh, height: f64) -> usize {
                 (nearest <= height && new <= old.max(floor)).then_some((new, a, to))
             })
             .min_by(|x, y| x.0.total_cmp(&y.0));
-        if let Some((_, a, to)) = best {
+        if let Some((_, a, to)) = best
+            && s.held(envelope.as_deref_mut(), (a, v, to), &mut around, &mut after)
+        {
             s.collapse(a, v, to);
             vertices -= 1;
             made += 1;
         }
     }
     if made > 0 {
-        *mesh = s.into_mesh();
+        *mesh = s.into_held_mesh(envelope);
     }
     made
 }
@@ -117,15 +125,15 @@ mod tests {
         // of one inradius, flattened under three, back to the sphere's
         // face.
         let mut kept = mesh.clone();
-        assert_eq!(flatten_tips(&mut kept, inradius), 0);
+        assert_eq!(flatten_tips(&mut kept, inradius, None), 0);
         assert_eq!(kept.num_faces(), faces);
         let mut flat = mesh.clone();
-        assert_eq!(flatten_tips(&mut flat, 3.0 * inradius), 1);
+        assert_eq!(flatten_tips(&mut flat, 3.0 * inradius, None), 1);
         assert_eq!(flat.num_faces(), faces - 2);
         let sphere = shapes::icosphere(3);
         assert_eq!(flat.num_vertices(), sphere.num_vertices());
         // A raised centre too low to be a tip (its faces nearly flat) stays.
         let (mut low, inradius) = sphere_with_a_tip(0.3);
-        assert_eq!(flatten_tips(&mut low, 3.0 * inradius), 0);
+        assert_eq!(flatten_tips(&mut low, 3.0 * inradius, None), 0);
     }
 }

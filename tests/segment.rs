@@ -153,7 +153,7 @@ fn a_label_lands_in_world_millimetres_through_the_files_transform() {
             fill_voids: false,
             faces: None,
             max_handle: None,
-            within_voxels: false,
+            within_voxels: None,
             smoother: Default::default(),
         };
         let (mesh, report) = segment::mesh(&read, &path, &opts, &Silent).unwrap();
@@ -231,7 +231,7 @@ fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
         fill_voids: false,
         faces: None,
         max_handle: None,
-        within_voxels: false,
+        within_voxels: None,
         smoother: Default::default(),
     };
     let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
@@ -297,7 +297,7 @@ fn held_within_its_voxels_the_white_matter_keeps_its_gyri_at_50k_faces() {
         fill_voids: false,
         faces: Some(50_000),
         max_handle: None,
-        within_voxels: true,
+        within_voxels: Some(segment::fit::TOLERANCE),
     };
     let (mesh, report) = segment::mesh(&volume, &path, &opts, &Silent).unwrap();
     println!("white matter held within its voxels: {report:?}");
@@ -314,6 +314,29 @@ fn held_within_its_voxels_the_white_matter_keeps_its_gyri_at_50k_faces() {
         report.min_angle >= organtex::mesh::decimate::MIN_ANGLE,
         "{}",
         report.min_angle
+    );
+    // Held within 1.4 voxels (the surface not drawn to them first): no
+    // corner got farther through the decimation.
+    let loose = MeshOptions {
+        within_voxels: Some(1.4),
+        ..opts
+    };
+    let (mesh, report) = segment::mesh(&volume, &path, &loose, &Silent).unwrap();
+    check_surface(&mesh, "white matter within 1.4 voxels");
+    assert!(
+        report.fit.farthest_before.is_none_or(|d| d <= 1.4 + 1e-9),
+        "{:?}",
+        report.fit
+    );
+    // Closer than a staircase allows is refused.
+    let tight = MeshOptions {
+        within_voxels: Some(0.5),
+        ..opts
+    };
+    let e = segment::mesh(&volume, &path, &tight, &Silent).unwrap_err();
+    assert!(
+        e.to_string().contains("cannot be held within 0.5 voxel"),
+        "{e}"
     );
 }
 
@@ -823,7 +846,7 @@ fn the_windowed_sinc_leaves_a_rounder_ball_than_taubin() {
             fill_voids: false,
             faces: None,
             max_handle: None,
-            within_voxels: false,
+            within_voxels: None,
         };
         let (mesh, report) = segment::mesh(&volume, Path::new("ball.nii"), &opts, &Silent).unwrap();
         assert_eq!(check_surface(&mesh, "ball"), vec![0]);

@@ -19,7 +19,7 @@ to about 0.17 voxel (the mesh samples' spacing) or understate it by up
 to about 0.35 (the faces' samples); "to voxels" may understate it. Time is wall-clock, each
 tool from the file to its surface.
 
-Usage: tools/compare_mesh.py [--organtex target/release/organtex] [--max-handle MM] [--within-voxels]
+Usage: tools/compare_mesh.py [--organtex target/release/organtex] [--max-handle MM] [--within-voxels [V ...]]
                              [--faces 50000] [--json OUT.json]
 """
 
@@ -256,13 +256,13 @@ def skimage_mc(data, level):
     return poly, seconds
 
 
-def organtex_mesh(exe, path, level, faces, out, max_handle=None, within_voxels=False):
+def organtex_mesh(exe, path, level, faces, out, max_handle=None, within_voxels=None):
     import vtk
 
     start = time.perf_counter()
     handle = ["--max-handle", str(max_handle)] if max_handle else []
     if within_voxels:
-        handle.append("--within-voxels")
+        handle += ["--within-voxels", str(within_voxels)]
     subprocess.run(
         [exe, "mesh", str(path), "--threshold", str(level), "--faces", str(faces),
          "-o", str(out), "--json", *handle],
@@ -283,8 +283,9 @@ def main():
     ap.add_argument("--json")
     ap.add_argument("--max-handle", type=float,
                     help="also organtex with --max-handle MM (thin handles cut or plugged)")
-    ap.add_argument("--within-voxels", action="store_true",
-                    help="also organtex with --within-voxels (every voxel corner held through the decimation)")
+    ap.add_argument("--within-voxels", type=float, nargs="*",
+                    help="also organtex with --within-voxels V for each V given (every voxel corner held "
+                         "within V voxels through the decimation; 0.9 if none given)")
     args = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -299,10 +300,10 @@ def main():
                                         args.max_handle)
                 rows.append({"case": name, "tool": f"organtex --max-handle {args.max_handle:g}",
                              "seconds": t, **measure(poly, voxel_volume, from_world(affine), faces)})
-            if args.within_voxels:
+            for within in ([0.9] if args.within_voxels == [] else args.within_voxels or []):
                 poly, t = organtex_mesh(args.organtex, path, level, args.faces, Path(tmp) / "w.ply",
-                                        within_voxels=True)
-                rows.append({"case": name, "tool": "organtex --within-voxels",
+                                        within_voxels=within)
+                rows.append({"case": name, "tool": f"organtex --within-voxels {within:g}",
                              "seconds": t, **measure(poly, voxel_volume, from_world(affine), faces)})
             poly, t, to_voxels = vtk_pipeline(path, level, args.faces)
             rows.append({"case": name, "tool": "VTK (Slicer's pipeline)", "seconds": t,

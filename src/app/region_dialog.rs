@@ -52,7 +52,7 @@ impl RegionDialog {
             faces: faces.unwrap_or(defaults.faces),
             all_components: defaults.all_components,
             fill_voids: defaults.fill_voids,
-            within_voxels: defaults.within_voxels,
+            within_voxels: defaults.within_voxels.is_some(),
             fix_handles: false,
             handle: 2.0,
             path,
@@ -66,7 +66,7 @@ impl RegionDialog {
             faces: self.faces,
             all_components: self.all_components,
             fill_voids: self.fill_voids,
-            within_voxels: self.within_voxels,
+            within_voxels: self.within_voxels.then_some(crate::segment::fit::TOLERANCE),
             max_handle: self.fix_handles.then_some(self.handle),
             ..Segmentation::of(self.path.clone(), &self.choice)
         }

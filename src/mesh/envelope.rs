@@ -136,6 +136,14 @@ impl Envelope {
         &self.points
     }
 
+    /// The same points, every one loose, to be carried again within
+    /// `tolerance` (`carry_loose`).
+    pub fn released(mut self, tolerance: f64) -> Envelope {
+        self.carried.iter_mut().for_each(Vec::clear);
+        self.tolerance_squared = tolerance * tolerance;
+        self
+    }
+
     /// The points held, for another envelope on them.
     pub fn into_points(self) -> Vec<DVec3> {
         self.points
@@ -158,13 +166,17 @@ impl Envelope {
     pub fn allows(&mut self, around: &[u32], after: &[(u32, [DVec3; 3])]) -> bool {
         self.gathered.clear();
         for &f in around {
-            for &p in &self.carried[f as usize] {
+            let carried = &self.carried[f as usize];
+            if carried.is_empty() {
+                continue;
+            }
+            let own = after.iter().find(|(g, _)| *g == f);
+            for &p in carried {
                 let q = self.points[p as usize];
                 let within = |(_, t): &&(u32, [DVec3; 3])| {
                     closest_point(q, t).distance_squared(q) <= self.tolerance_squared
                 };
-                let own = after.iter().find(|(g, _)| *g == f).filter(within);
-                let g = match own.or_else(|| after.iter().find(within)) {
+                let g = match own.filter(within).or_else(|| after.iter().find(within)) {
                     Some(&(g, _)) => g,
                     None if self.strict => return false,
                     None => LOOSE,

@@ -105,9 +105,9 @@ pub struct Segmentation {
     /// Cut or plug handles thinner than this, mm (`mesh --max-handle`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_handle: Option<f64>,
-    /// Hold the voxel corners through the decimation (`--within-voxels`).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub within_voxels: bool,
+    /// Hold the voxel corners within this, voxels (`--within-voxels`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub within_voxels: Option<f64>,
 }
 
 fn default_smooth() -> usize {
@@ -143,7 +143,7 @@ impl Segmentation {
             all_components: false,
             fill_voids: false,
             max_handle: None,
-            within_voxels: false,
+            within_voxels: None,
         }
     }
 

@@ -472,7 +472,7 @@ mod tests {
             fill_voids: false,
             faces: Some(FACES),
             max_handle: None,
-            within_voxels: false,
+            within_voxels: None,
         };
         let (surface, report) = mesh(&volume, Path::new("finned.nii"), &opts, &Silent).unwrap();
         let fit = report.fit;

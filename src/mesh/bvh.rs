@@ -13,6 +13,7 @@
 
 use glam::{DMat3, DVec3};
 
+use super::TriMesh;
 use super::closest::closest_point;
 
 /// Triangles per leaf.
@@ -84,6 +85,12 @@ impl Bvh {
             bvh.order = order;
         }
         bvh
+    }
+
+    /// `for_distances` over `mesh`'s faces, in order: a face's index in
+    /// the mesh is the one the queries give.
+    pub fn over_faces(mesh: &TriMesh) -> Bvh {
+        Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect())
     }
 
     /// The same tree over the same triangles moved (`for_distances`'s:

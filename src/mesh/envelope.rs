@@ -56,10 +56,11 @@ impl Envelope {
         Envelope::from_parts(mesh.positions.clone(), carried, tolerance)
     }
 
-    /// `points` held within `tolerance` of a surface of `faces` faces,
-    /// `bvh` over them in order (`Bvh::for_distances`): each carried by the
-    /// face nearest it; those farther than the tolerance are loose.
-    pub(crate) fn holding(faces: usize, bvh: &Bvh, points: Vec<DVec3>, tolerance: f64) -> Envelope {
+    /// `points` held within `tolerance` of the surface `bvh` is over (its
+    /// faces in order: `Bvh::over_faces`): each carried by the face nearest
+    /// it; those farther than the tolerance are loose.
+    pub(crate) fn holding(bvh: &Bvh, points: Vec<DVec3>, tolerance: f64) -> Envelope {
+        let faces = bvh.tris.len();
         let mut envelope = Envelope::from_parts(points, vec![Vec::new(); faces], tolerance);
         envelope.carry_loose(bvh);
         envelope
@@ -144,9 +145,11 @@ impl Envelope {
         self
     }
 
-    /// The points held, for another envelope on them.
-    pub fn into_points(self) -> Vec<DVec3> {
-        self.points
+    /// The same points and tolerance, face `f` carrying `carried[f]` (the
+    /// envelopes of a surface's pieces joined).
+    pub fn carrying(mut self, carried: Vec<Vec<u32>>) -> Envelope {
+        self.carried = carried;
+        self
     }
 
     /// How far from the surface the points are held.
@@ -185,6 +188,15 @@ impl Envelope {
             }
         }
         true
+    }
+
+    /// `allows`, and if so `commit`: the change made in the envelope.
+    pub fn admit(&mut self, around: &[u32], after: &[(u32, [DVec3; 3])]) -> bool {
+        let ok = self.allows(around, after);
+        if ok {
+            self.commit(around);
+        }
+        ok
     }
 
     /// The points of the last allowed change carried by their new faces.
@@ -228,11 +240,7 @@ pub fn held(
             }),
         )
     }));
-    let ok = envelope.allows(ring, after);
-    if ok {
-        envelope.commit(ring);
-    }
-    ok
+    envelope.admit(ring, after)
 }
 
 #[cfg(test)]
@@ -249,8 +257,8 @@ mod tests {
         let centre = (a + b + c) / 3.0;
         let outward = (b - a).cross(c - a).normalize();
         let points = vec![centre + outward * 0.05, centre + outward * 2.0];
-        let bvh = Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect());
-        let mut envelope = Envelope::holding(mesh.num_faces(), &bvh, points, 0.1);
+        let bvh = Bvh::over_faces(&mesh);
+        let mut envelope = Envelope::holding(&bvh, points, 0.1);
         // The near point is carried by face 0, the far one loose.
         assert_eq!(envelope.carried(0), &[0]);
         assert_eq!(envelope.loose(), vec![1]);

@@ -206,7 +206,7 @@ pub fn fit(
     let faces_at = mesh.faces_at_vertices();
     let neighbours = super::smooth::vertex_neighbours(mesh);
     // Built once; the moves only refit it.
-    let mut bvh = Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect());
+    let mut bvh = Bvh::over_faces(mesh);
     // The corners within the tolerance stay within it (a move towards one
     // corner may not push the surface off another); the moves are for the
     // loose ones, those beyond it.
@@ -215,7 +215,7 @@ pub fn fit(
             held.carry_loose(&bvh);
             held
         }
-        None => Envelope::holding(mesh.num_faces(), &bvh, voxels.corners(), tolerance),
+        None => Envelope::holding(&bvh, voxels.corners(), tolerance),
     };
     let loose = |held: &Envelope, bvh: &Bvh| {
         let points: Vec<DVec3> = held

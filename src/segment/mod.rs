@@ -383,17 +383,16 @@ pub fn mesh(
                     fit::TOLERANCE
                 )));
             }
-            Some(within) if within == fit::TOLERANCE => {
+            Some(within) if within <= fit::TOLERANCE => {
                 let (_, envelope) = fit::fit(&mut mesh, &voxel_corners, None, progress)?;
                 Hold::Throughout(envelope)
             }
-            // Farther, the smoothed surface already holds its corners (on
-            // the MNI white matter the farthest is 1.11 voxels away).
+            // Farther, the smoothed surface holds its corners as it is (on
+            // the MNI white matter the farthest is 1.11 voxels away); any
+            // farther than `within` are left to the fit after.
             Some(within) => {
-                let bvh =
-                    Bvh::for_distances((0..mesh.num_faces()).map(|f| mesh.corners(f)).collect());
                 let corners = voxel_corners.corners();
-                let envelope = Envelope::holding(mesh.num_faces(), &bvh, corners, within * voxel);
+                let envelope = Envelope::holding(&Bvh::over_faces(&mesh), corners, within * voxel);
                 Hold::Throughout(envelope)
             }
             None => Hold::EachRound(ENVELOPE_VOXELS * voxel),

@@ -100,11 +100,9 @@ pub fn flip_edges(
                     (f0 as u32, [p(c), p(a), p(d)]),
                     (f1 as u32, [p(d), p(b), p(c)]),
                 ];
-                let around = [f0 as u32, f1 as u32];
-                if !envelope.allows(&around, &after) {
+                if !envelope.admit(&[f0 as u32, f1 as u32], &after) {
                     continue;
                 }
-                envelope.commit(&around);
             }
             // The four outer half-edges, before: b -> c, c -> a in f0;
             // a -> d, d -> b in f1.

@@ -72,18 +72,15 @@ pub(super) fn collapse_halves(
             envelope,
         }
     };
-    let run = |h: Half| -> Result<(Half, State, Option<Envelope>)> {
+    let run = |mut h: Half| -> Result<(Half, State, Option<Envelope>)> {
         let share = faces as f64 * h.mesh.num_faces() as f64 / mesh.num_faces() as f64;
         let mut s = State::new(&h.mesh);
-        let mut h = h;
         let mut envelope = h.envelope.take();
         let budget = (share * HALF_MARGIN) as usize;
         collapse(&mut s, envelope.as_mut(), budget, Some(&h.on_cut), progress)?;
         Ok((h, s, envelope))
     };
     let (a, b) = (half(false), half(true));
-    let tolerance = envelope.as_ref().map(Envelope::tolerance);
-    let points = envelope.map(Envelope::into_points);
     let (done_a, done_b) = rayon::join(|| run(a), || run(b));
     let halves = [done_a?, done_b?];
 
@@ -119,9 +116,7 @@ pub(super) fn collapse_halves(
         }
     }
     whole.alive = vec![true; whole.triangles.len()];
-    let envelope = points
-        .zip(tolerance)
-        .map(|(points, t)| Envelope::from_parts(points, carried, t));
+    let envelope = envelope.map(|e| e.carrying(carried));
     Ok((whole, envelope))
 }
 

@@ -305,11 +305,7 @@ impl State {
             return true;
         };
         self.faces_round(a, b, to, around, after);
-        let ok = envelope.allows(around, after);
-        if ok {
-            envelope.commit(around);
-        }
-        ok
+        envelope.admit(around, after)
     }
 
     /// The faces left, vertices in order of use, and `envelope` on them.

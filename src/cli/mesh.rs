@@ -76,12 +76,13 @@ pub struct Args {
     /// surface can hold; the surface is then first drawn to them), not
     /// only each round of collapses near the surface it was given: thin
     /// crests such as the white matter's gyri are kept at the face budget.
-    /// On the MNI white matter at 50,000 faces, 0.9 keeps every point of
-    /// its voxel faces within 1.14 voxels of the surface (2.57 by
-    /// default) but leaves it as rough as the undecimated surface (spread
-    /// of mean curvature 0.51 against 0.31); 1.4 keeps them within 1.44
-    /// and is as smooth as the default (0.30). Either takes 1-2 s more.
-    /// Needs --faces.
+    /// At 0.9 the last fit holds every point of the voxel faces, not only
+    /// their corners. On the MNI white matter at 50,000 faces, 0.9 keeps
+    /// every point of its voxel faces within 0.98 voxel of the surface
+    /// (2.57 by default) but leaves it as rough as the undecimated surface
+    /// (spread of mean curvature 0.50 against 0.31) and takes 3 s more;
+    /// 1.4 keeps them within 1.44 and is as smooth as the default (0.30),
+    /// 1 s more. Needs --faces.
     #[arg(long, value_name = "VOXELS", requires = "faces", num_args = 0..=1,
           default_missing_value = "0.9", value_parser = super::positive_length)]
     within_voxels: Option<f64>,
@@ -229,8 +230,8 @@ pub fn run(args: Args) -> Result<()> {
         farthest.map_or(count.clone(), |d| format!("{count} (the farthest {d:.2})"))
     };
     println!(
-        "  voxel boundary: {} corners, farther than {} voxel from the surface {}, before fitting {}",
-        super::thousands(fit.corners),
+        "  voxel boundary: {} points held, farther than {} voxel from the surface {}, before fitting {}",
+        super::thousands(fit.points),
         segment::fit::TOLERANCE,
         far(fit.far, fit.farthest),
         far(fit.far_before, fit.farthest_before),

@@ -42,8 +42,8 @@ use crate::segment::ScalarVolume;
 /// surface bends between a voxel face's corners, the face's middle or
 /// edges can lie farther than they do: on the MNI white matter held
 /// within its voxels at 50k faces (`MeshOptions::within_voxels`), 1.14
-/// voxels against 1.03 (exact distances to the points compare_mesh.py
-/// takes, nine per voxel face).
+/// voxels against 1.03 with the corners held (the points compare_mesh.py
+/// takes, nine per voxel face), hence `Voxels::face_points`.
 pub const TOLERANCE: f64 = 0.9;
 /// Corners farther than this take part in the moves, voxels: those just
 /// inside the tolerance too, so that a move towards a corner on one side
@@ -67,15 +67,23 @@ const STEP: f64 = 0.5;
 /// dragged the white matter's surface across sulci, 3.5 voxels from any
 /// voxel face.
 const OFF_VOXELS: f64 = 0.6;
-/// Rounds of moves at most.
-const ROUNDS: usize = 4;
+/// Rounds of moves at most, holding the corners.
+pub const ROUNDS: usize = 4;
+/// Rounds of moves at most, holding every point of the voxel faces
+/// (`Voxels::face_points`): a face's edge midpoint left beyond the
+/// tolerance lies between two held corners, and takes a few rounds more
+/// to draw in (on the MNI white matter at 50k faces, with the corners held
+/// through the decimation: the farthest face point 1.005 voxels away
+/// after 4 rounds, 0.98 after 6, 0.975 after 8).
+pub const FACE_POINT_ROUNDS: usize = 6;
 
 /// What `fit` did.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Fit {
-    /// The voxel boundary's corners, and how many lay farther than
-    /// `TOLERANCE` from the surface before the moves and after.
-    pub corners: usize,
+    /// The points held (the voxel boundary's corners, or every point of
+    /// its faces), and how many lay farther than `TOLERANCE` from the
+    /// surface before the moves and after.
+    pub points: usize,
     pub far_before: usize,
     pub far: usize,
     /// The farthest of those, before and after, voxels (none if none).
@@ -147,6 +155,56 @@ impl Voxels<'_> {
             .collect()
     }
 
+    /// The points compare_mesh.py measures a surface's distance from: the
+    /// nine of each face between an inside voxel and an outside one (its
+    /// corners, its edges' midpoints, its centre), each once, in world
+    /// units, in lattice order. Where the surface bends between a face's
+    /// corners, its middle lies farther than they do.
+    pub fn face_points(&self) -> Vec<DVec3> {
+        let [nx, ny, nz] = self.volume.size.map(|n| n as i64);
+        // On the lattice of half voxels (voxel i's centre at 2i), so that
+        // the points faces share sort together and are kept once.
+        let mut halves: Vec<[i64; 3]> = (-1..nz)
+            .into_par_iter()
+            .flat_map_iter(|z| {
+                let mut slab = Vec::new();
+                for y in -1..ny {
+                    for x in -1..nx {
+                        let here = self.at(x, y, z);
+                        for axis in 0..3 {
+                            let mut next = [x, y, z];
+                            next[axis] += 1;
+                            if self.at(next[0], next[1], next[2]) == here {
+                                continue;
+                            }
+                            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                            let mut centre = [2 * x, 2 * y, 2 * z];
+                            centre[axis] += 1;
+                            for du in -1..=1 {
+                                for dv in -1..=1 {
+                                    let mut q = centre;
+                                    q[u] += du;
+                                    q[v] += dv;
+                                    slab.push(q);
+                                }
+                            }
+                        }
+                    }
+                }
+                slab
+            })
+            .collect();
+        halves.par_sort_unstable();
+        halves.dedup();
+        halves
+            .into_iter()
+            .map(|[x, y, z]| {
+                let p = DVec3::new(x as f64, y as f64, z as f64) / 2.0;
+                self.volume.to_world.transform_point3(p)
+            })
+            .collect()
+    }
+
     /// Whether `p` (world units) lies within `limit` voxels of a face
     /// between an inside voxel and an outside one (voxel coordinates; one
     /// within two voxels of it: `limit` below 1.5). The nearest voxels are
@@ -186,20 +244,23 @@ static NEIGHBOURHOOD: std::sync::LazyLock<Vec<[i64; 3]>> = std::sync::LazyLock::
 
 /// Moves `mesh`'s vertices (world units) so that every corner of
 /// `voxels`' boundary lies within `TOLERANCE` voxels of it, as the module
-/// says, as nearly as the guards allow. `held` is the envelope of the
-/// corners on `mesh` (as the decimation left it; none: made here), given
-/// back with the corners the moves brought within carried. Same bytes on
+/// says, as nearly as the guards allow, in at most `rounds` rounds.
+/// `held` is the envelope of the points held on `mesh` (the corners as
+/// the decimation left them, or every point of the voxel faces; none: the
+/// corners, made here), given back with the points the moves brought
+/// within carried. Same bytes on
 /// any thread count (the distances are taken in parallel, the moves made
 /// in vertex order).
 pub fn fit(
     mesh: &mut TriMesh,
     voxels: &Voxels,
     held: Option<Envelope>,
+    rounds: usize,
     progress: &dyn Progress,
 ) -> Result<(Fit, Envelope)> {
     let voxel = voxels.volume.voxel_volume().cbrt();
     let to_voxel = voxels.volume.to_world.inverse();
-    progress.stage("fitting the surface to the voxels", ROUNDS as u64);
+    progress.stage("fitting the surface to the voxels", rounds as u64);
     let (tolerance, aim) = (TOLERANCE * voxel, AIM * voxel);
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
@@ -234,7 +295,7 @@ pub fn fit(
     };
     let mut after = Vec::new();
     let mut report = Fit {
-        corners: held.points().len(),
+        points: held.points().len(),
         far_before: 0,
         far: 0,
         farthest_before: None,
@@ -248,7 +309,7 @@ pub fn fit(
         .into_iter()
         .map(|(p, _, _)| p)
         .collect();
-    for round in 0..ROUNDS {
+    for round in 0..rounds {
         progress::check(progress)?;
         if round > 0 {
             bvh.refit(|f| mesh.corners(f as usize));
@@ -485,7 +546,7 @@ mod tests {
             inside: &inside,
         };
         let corners = voxels.corners();
-        assert_eq!(corners.len(), fit.corners);
+        assert_eq!(corners.len(), fit.points);
         // The corners are the lattice points with inside and outside
         // voxels among their eight.
         let mut expected = Vec::new();
@@ -505,6 +566,39 @@ mod tests {
             }
         }
         assert_eq!(corners, expected);
+        // The faces' points: the corners, and each boundary face's edge
+        // midpoints and centre, on the half-voxel lattice.
+        let points = voxels.face_points();
+        let halves: std::collections::BTreeSet<[i64; 3]> = points
+            .iter()
+            .map(|p| (*p / 0.4).round().as_i64vec3().to_array())
+            .collect();
+        assert_eq!(halves.len(), points.len(), "each point once");
+        let mut faces = 0;
+        for z in -1..36i64 {
+            for y in -1..36i64 {
+                for x in -1..36i64 {
+                    for axis in 0..3 {
+                        let mut next = [x, y, z];
+                        next[axis] += 1;
+                        if voxels.at(x, y, z) != voxels.at(next[0], next[1], next[2]) {
+                            faces += 1;
+                            let mut centre = [2 * x, 2 * y, 2 * z];
+                            centre[axis] += 1;
+                            assert!(halves.contains(&centre), "{centre:?}");
+                        }
+                    }
+                }
+            }
+        }
+        for c in &corners {
+            assert!(halves.contains(&(*c / 0.4).round().as_i64vec3().to_array()));
+        }
+        // The rest are the edges' midpoints: this boundary has no edge
+        // where four faces meet, so each of its faces' four edges is
+        // shared by two of them.
+        let midpoints = points.len() - faces - corners.len();
+        assert_eq!(midpoints, 2 * faces);
         let farthest = corners
             .iter()
             .map(|&p| {

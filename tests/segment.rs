@@ -306,10 +306,14 @@ fn held_within_its_voxels_the_white_matter_keeps_its_gyri_at_50k_faces() {
     let fit = report.fit;
     // The fit then holds every point of the voxel faces (1,259,022, four
     // per corner): a dozen lie beyond 0.9 voxel, none beyond one (the
-    // farthest 0.98; 2.5 without the hold).
+    // farthest 0.98; 2.5 without the hold). And the other way: the
+    // surface strays beyond 0.9 voxel from the voxel faces on a few dozen
+    // faces, nowhere by a voxel (0.99; 1.10 when drawn to them one way).
     assert!(fit.points > 3 * 313_904, "{fit:?}");
     assert!(fit.far <= 20, "{fit:?}");
     assert!(fit.farthest.is_none_or(|d| d <= 1.0), "{fit:?}");
+    assert!(fit.faces_off <= 100, "{fit:?}");
+    assert!(fit.farthest_off.is_none_or(|d| d <= 1.0), "{fit:?}");
     let ratio = report.volume / report.voxel_volume;
     assert!((ratio - 1.0).abs() <= 0.01, "volume {ratio}");
     assert!(

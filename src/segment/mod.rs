@@ -193,11 +193,11 @@ pub struct MeshOptions {
     /// only each round's surface within `ENVELOPE_VOXELS`: thin crests
     /// (gyri) kept at the face budget. On the MNI white matter at 50k
     /// faces, 0.9 (where the last fit holds every point of the voxel
-    /// faces, `fit::FACE_POINT_ROUNDS`) keeps every voxel-face point
-    /// within 0.98 voxel but leaves it as rough as the undecimated
-    /// surface; 1.4 keeps them
-    /// within 1.44 and is smoother than the default (measured in the
-    /// README).
+    /// faces and draws the surface back to them, `fit::BOTH_WAYS`) keeps
+    /// the surface and the voxel faces within a voxel of each other both
+    /// ways (0.99 / 0.98) but leaves it as rough as the undecimated
+    /// surface; 1.4 keeps the voxel faces within 1.44 and is smoother than
+    /// the default (measured in the README).
     pub within_voxels: Option<f64>,
 }
 
@@ -373,7 +373,7 @@ pub fn mesh(
         volume,
         inside: &kept,
     };
-    let (mut held, mut rounds) = (None, fit::ROUNDS);
+    let (mut held, mut fitting) = (None, fit::TO_CORNERS);
     if let Some(budget) = opts.faces.filter(|&b| b < mesh.num_faces()) {
         let voxel = volume.voxel_volume().cbrt();
         let hold = match opts.within_voxels {
@@ -387,7 +387,7 @@ pub fn mesh(
             }
             Some(within) if within <= fit::TOLERANCE => {
                 let (_, envelope) =
-                    fit::fit(&mut mesh, &voxel_corners, None, fit::ROUNDS, progress)?;
+                    fit::fit(&mut mesh, &voxel_corners, None, fit::TO_CORNERS, progress)?;
                 Hold::Throughout(envelope)
             }
             // Farther, the smoothed surface holds its corners as it is (on
@@ -405,21 +405,22 @@ pub fn mesh(
         match opts.within_voxels {
             // Held within the fit's own tolerance, the corners have been
             // held all along; the fit now holds every point of the voxel
-            // faces, so that none is left beyond a voxel (on the MNI white
-            // matter at 50k faces: the farthest 0.98 voxels from the
-            // surface against 1.14 with the corners alone, 1.6 s more).
+            // faces, so that none is left beyond a voxel, and draws the
+            // surface back where it strays from them (`fit::BOTH_WAYS`; on
+            // the MNI white matter at 50k faces: 0.99 / 0.98 voxels
+            // against 1.14 / 1.14 with the corners alone, 3 s more).
             Some(within) if within <= fit::TOLERANCE => {
                 let points = voxel_corners.face_points();
                 let bvh = Bvh::over_faces(&mesh);
                 held = Some(Envelope::holding(&bvh, points, fit::TOLERANCE * voxel));
-                rounds = fit::FACE_POINT_ROUNDS;
+                fitting = fit::BOTH_WAYS;
             }
             // The fit holds the corners within its own tolerance.
             Some(_) => held = held.map(|e| e.released(fit::TOLERANCE * voxel)),
             None => {}
         }
     }
-    let (fit, _) = fit::fit(&mut mesh, &voxel_corners, held, rounds, progress)?;
+    let (fit, _) = fit::fit(&mut mesh, &voxel_corners, held, fitting, progress)?;
     let report = MeshReport {
         region_voxels,
         voxels,

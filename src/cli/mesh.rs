@@ -82,8 +82,8 @@ pub struct Args {
     /// surface and its voxel faces within a voxel of each other both ways
     /// (0.99 / 0.98; by default 1.14 / 2.57) but leaves it as rough as the
     /// undecimated surface (spread of mean curvature 0.50 against 0.31)
-    /// and takes 3 s more; 1.4 keeps the voxel faces within 1.44 and is as
-    /// smooth as the default (0.30), 1 s more. Needs --faces.
+    /// and takes about 4 s more; 1.4 keeps the voxel faces within 1.44 and
+    /// is as smooth as the default (0.30), 1 s more. Needs --faces.
     #[arg(long, value_name = "VOXELS", requires = "faces", num_args = 0..=1,
           default_missing_value = "0.9", value_parser = super::positive_length)]
     within_voxels: Option<f64>,

@@ -21,9 +21,14 @@
 //! lets no held corner go, else halved or quartered. In rounds, until no
 //! corner is loose. `segment::mesh` fits the full surface before the
 //! decimation (so every corner is held from the start) and the decimated
-//! one after it (for the corners its last mends let go). Distances are in
-//! voxels: world units over the cube root of a voxel's volume, exact for
-//! the isotropic voxels of most segmentations.
+//! one after it (for the corners its last mends let go). Held within the
+//! voxels (`MeshOptions::within_voxels` at 0.9), that last fit holds every
+//! point of the voxel faces, not only the corners, and draws the surface
+//! back both ways: a face with a point farther than the tolerance from
+//! the voxel faces asks the same of that point towards the nearest of
+//! them (`BOTH_WAYS`). Distances are in voxels: world units over the cube
+//! root of a voxel's volume, exact for the isotropic voxels of most
+//! segmentations.
 
 use glam::{DAffine3, DVec3};
 use rayon::prelude::*;
@@ -291,8 +296,8 @@ impl Voxels<'_> {
     }
 }
 
-/// From the point of the voxel face at `centre` across `axis` (a unit
-/// square) nearest `q` to `q`, voxel coordinates.
+/// The way from the voxel face centred at `centre` across `axis` (a unit
+/// square) to `q`: from the face's point nearest `q`, voxel coordinates.
 fn off_face(q: DVec3, centre: DVec3, axis: usize) -> DVec3 {
     let d = q - centre;
     let mut off = d - d.clamp(DVec3::splat(-0.5), DVec3::splat(0.5));
@@ -311,13 +316,12 @@ static NEIGHBOURHOOD: std::sync::LazyLock<Vec<[i64; 3]>> = std::sync::LazyLock::
 
 /// Moves `mesh`'s vertices (world units) so that every corner of
 /// `voxels`' boundary lies within `TOLERANCE` voxels of it, as the module
-/// says, as nearly as the guards allow, as `fitting` asks.
-/// `held` is the envelope of the points held on `mesh` (the corners as
-/// the decimation left them, or every point of the voxel faces; none: the
-/// corners, made here), given back with the points the moves brought
-/// within carried. Same bytes on
-/// any thread count (the distances are taken in parallel, the moves made
-/// in vertex order).
+/// says, as nearly as the guards allow, as `fitting` asks. `held` is the
+/// envelope of the points held on `mesh` (the corners as the decimation
+/// left them, or every point of the voxel faces; none: the corners, made
+/// here), given back with the points the moves brought within carried.
+/// Same bytes on any thread count (the distances are taken in parallel,
+/// the moves made in vertex order).
 pub fn fit(
     mesh: &mut TriMesh,
     voxels: &Voxels,

@@ -408,7 +408,7 @@ pub fn mesh(
             // faces, so that none is left beyond a voxel, and draws the
             // surface back where it strays from them (`fit::BOTH_WAYS`; on
             // the MNI white matter at 50k faces: 0.99 / 0.98 voxels
-            // against 1.14 / 1.14 with the corners alone, 3 s more).
+            // against 1.14 / 1.14 with the corners alone, 2 s more).
             Some(within) if within <= fit::TOLERANCE => {
                 let points = voxel_corners.face_points();
                 let bvh = Bvh::over_faces(&mesh);

@@ -237,11 +237,11 @@ pub fn run(args: Args) -> Result<()> {
         far(fit.far, fit.farthest),
         far(fit.far_before, fit.farthest_before),
     );
-    if f.report.fit.farthest_off.is_some() {
+    if let Some(faces) = fit.faces_off {
         println!(
             "  faces with a point farther than {} voxel from the voxel faces: {}",
             segment::fit::TOLERANCE,
-            far(fit.faces_off, fit.farthest_off),
+            far(faces, fit.farthest_off),
         );
     }
     println!("wrote {}", f.output.display());

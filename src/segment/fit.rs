@@ -19,7 +19,7 @@
 //! face, turns none far, leaves none thinner than the decimation's guard
 //! allows, keeps the vertex within `OFF_VOXELS` of the voxels' faces and
 //! lets no held corner go, else halved or quartered. In rounds, until no
-//! corner is loose. `segment::mesh` fits the full surface before the
+//! corner is loose (and, both ways, no face strays). `segment::mesh` fits the full surface before the
 //! decimation (so every corner is held from the start) and the decimated
 //! one after it (for the corners its last mends let go). Held within the
 //! voxels (`MeshOptions::within_voxels` at 0.9), that last fit holds every
@@ -77,9 +77,10 @@ const OFF_VOXELS: f64 = 0.6;
 pub struct Fitting {
     /// Rounds of moves at most.
     pub rounds: usize,
-    /// Whether the surface is drawn back to the voxels' faces too where
-    /// it strays farther than `TOLERANCE` from them (`off_voxels`), not
-    /// only to the points held.
+    /// Whether every point of the voxel faces is held
+    /// (`Voxels::face_points`), not only their corners, and the surface
+    /// drawn back to the voxels' faces too where it strays farther than
+    /// `TOLERANCE` from them (`off_voxels`).
     pub both_ways: bool,
 }
 
@@ -97,7 +98,7 @@ pub const TO_CORNERS: Fitting = Fitting {
 /// decimation: the farthest face point 1.005 voxels from the surface
 /// after 4 rounds, 0.98 after 6, 0.975 after 8; the farthest point of the
 /// surface from the voxels 0.99 against 1.10 one way only. Scanning the
-/// faces for it each round costs about a second on the white matter.
+/// faces for it (every round) and the face points held cost 2 s there.
 pub const BOTH_WAYS: Fitting = Fitting {
     rounds: 6,
     both_ways: true,
@@ -117,10 +118,10 @@ pub struct Fit {
     pub farthest: Option<f64>,
     /// Vertex moves made.
     pub moves: usize,
-    /// Drawn both ways (`Fitting::both_ways`): the faces with a sample
-    /// farther than `TOLERANCE` from the voxels' faces after the moves,
-    /// and the farthest sample, voxels (none if none).
-    pub faces_off: usize,
+    /// Drawn both ways (`Fitting::both_ways`; else none): the faces with
+    /// a sample farther than `TOLERANCE` from the voxels' faces after the
+    /// moves, and the farthest sample, voxels (none if none).
+    pub faces_off: Option<usize>,
     pub farthest_off: Option<f64>,
 }
 
@@ -189,7 +190,7 @@ impl Voxels<'_> {
     /// The points compare_mesh.py measures a surface's distance from: the
     /// nine of each face between an inside voxel and an outside one (its
     /// corners, its edges' midpoints, its centre), each once, in world
-    /// units, in lattice order. Where the surface bends between a face's
+    /// units, sorted by x, then y, then z. Where the surface bends between a face's
     /// corners, its middle lies farther than they do.
     pub fn face_points(&self) -> Vec<DVec3> {
         let [nx, ny, nz] = self.volume.size.map(|n| n as i64);
@@ -244,9 +245,9 @@ impl Voxels<'_> {
         let q = to_voxel.transform_point3(p);
         let c = q.round().as_i64vec3();
         let limit = limit * limit;
-        // Loops rather than `boundary_faces_near`'s iterator: this is the
-        // fit's innermost test, and with the iterator the white matter at
-        // --within-voxels 0.9 took 8.3 s against 7.4 (same bytes).
+        // Loops rather than an iterator chain: this is the fit's innermost
+        // test, and with an iterator the white matter at --within-voxels
+        // 0.9 took 8.3 s against 7.4 (same bytes).
         for &[dx, dy, dz] in NEIGHBOURHOOD.iter() {
             let [x, y, z] = [c.x + dx, c.y + dy, c.z + dz];
             let here = self.at(x, y, z);
@@ -266,33 +267,54 @@ impl Voxels<'_> {
     }
 
     /// The point nearest `p` (world units) of the faces between inside
-    /// and outside voxels within two voxels of it, if any, world units.
+    /// and outside voxels, world units; none if none lies within 16
+    /// voxels of it.
     fn nearest_on_faces(&self, to_voxel: &DAffine3, p: DVec3) -> Option<DVec3> {
         let q = to_voxel.transform_point3(p);
-        self.boundary_faces_near(q)
-            .map(|(centre, axis)| q - off_face(q, centre, axis))
-            .min_by(|a, b| a.distance_squared(q).total_cmp(&b.distance_squared(q)))
-            .map(|nearest| self.volume.to_world.transform_point3(nearest))
+        let c = q.round().as_i64vec3();
+        // The faces of the voxels within r of c along every axis, widening
+        // r: any other face lies at least r from q (q is within half a
+        // voxel of c's centre, a face within half a voxel of its voxel's),
+        // so the nearest of these, if within r, is the nearest of all.
+        for r in [2, 4, 8, 16] {
+            let mut best: Option<DVec3> = None;
+            for z in c.z - r..=c.z + r {
+                for y in c.y - r..=c.y + r {
+                    for x in c.x - r..=c.x + r {
+                        let here = self.at(x, y, z);
+                        for axis in 0..3 {
+                            let mut next = [x, y, z];
+                            next[axis] += 1;
+                            if self.at(next[0], next[1], next[2]) == here {
+                                continue;
+                            }
+                            let mut centre = DVec3::new(x as f64, y as f64, z as f64);
+                            centre[axis] += 0.5;
+                            let point = q - off_face(q, centre, axis);
+                            if best
+                                .is_none_or(|b| point.distance_squared(q) < b.distance_squared(q))
+                            {
+                                best = Some(point);
+                            }
+                        }
+                    }
+                }
+            }
+            if let Some(nearest) = best.filter(|b| b.distance(q) <= r as f64) {
+                return Some(self.volume.to_world.transform_point3(nearest));
+            }
+        }
+        None
     }
 
-    /// The faces between an inside voxel and an outside one of the voxels
-    /// within two of the one `q` (voxel coordinates) lies in, nearest
-    /// voxels first, each as its centre and its normal's axis.
-    fn boundary_faces_near(&self, q: DVec3) -> impl Iterator<Item = (DVec3, usize)> + '_ {
-        let c = q.round().as_i64vec3();
-        NEIGHBOURHOOD.iter().flat_map(move |&[dx, dy, dz]| {
-            let [x, y, z] = [c.x + dx, c.y + dy, c.z + dz];
-            let here = self.at(x, y, z);
-            (0..3).filter_map(move |axis| {
-                let mut next = [x, y, z];
-                next[axis] += 1;
-                (self.at(next[0], next[1], next[2]) != here).then(|| {
-                    let mut centre = DVec3::new(x as f64, y as f64, z as f64);
-                    centre[axis] += 0.5;
-                    (centre, axis)
-                })
-            })
-        })
+    /// Whether `to` lies nearer the faces between inside and outside
+    /// voxels than `from` does (world units).
+    fn nearer(&self, to_voxel: &DAffine3, from: DVec3, to: DVec3) -> bool {
+        let distance = |p: DVec3| {
+            self.nearest_on_faces(to_voxel, p)
+                .map_or(f64::INFINITY, |n| n.distance(p))
+        };
+        distance(to) < distance(from)
     }
 }
 
@@ -315,11 +337,11 @@ static NEIGHBOURHOOD: std::sync::LazyLock<Vec<[i64; 3]>> = std::sync::LazyLock::
 });
 
 /// Moves `mesh`'s vertices (world units) so that every corner of
-/// `voxels`' boundary lies within `TOLERANCE` voxels of it, as the module
-/// says, as nearly as the guards allow, as `fitting` asks. `held` is the
-/// envelope of the points held on `mesh` (the corners as the decimation
-/// left them, or every point of the voxel faces; none: the corners, made
-/// here), given back with the points the moves brought within carried.
+/// `voxels`' boundary (every point of its faces, both ways) lies within
+/// `TOLERANCE` voxels of it, as the module says, as nearly as the guards
+/// allow, as `fitting` asks. `held` is the envelope of those points on
+/// `mesh` as the decimation left them (none: made here), given back with
+/// the points the moves brought within carried.
 /// Same bytes on any thread count (the distances are taken in parallel,
 /// the moves made in vertex order).
 pub fn fit(
@@ -347,6 +369,7 @@ pub fn fit(
             held.carry_loose(&bvh);
             held
         }
+        None if fitting.both_ways => Envelope::holding(&bvh, voxels.face_points(), tolerance),
         None => Envelope::holding(&bvh, voxels.corners(), tolerance),
     };
     let loose = |held: &Envelope, bvh: &Bvh| {
@@ -372,7 +395,7 @@ pub fn fit(
         farthest_before: None,
         farthest: None,
         moves: 0,
-        faces_off: 0,
+        faces_off: None,
         farthest_off: None,
     };
     (report.far_before, report.farthest_before) = beyond(&loose(&held, &bvh));
@@ -388,13 +411,15 @@ pub fn fit(
             bvh.refit(|f| mesh.corners(f as usize));
             held.carry_loose(&bvh);
         }
-        if held.loose().is_empty() {
+        let off = match fitting.both_ways {
+            true => off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE),
+            false => Vec::new(),
+        };
+        if held.loose().is_empty() && off.is_empty() {
             break;
         }
         let mut far = farther(&bvh, &candidates, NEAR * voxel);
-        if fitting.both_ways {
-            far.extend(off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE));
-        }
+        far.extend(off);
         let wanted = offsets(mesh, &neighbours, &far, aim, STEP * voxel);
         let mut made = 0;
         for (v, step) in wanted.iter().enumerate() {
@@ -409,7 +434,8 @@ pub fn fit(
                 .into_iter()
                 .map(|share| p + *step * share)
                 .find(|&to| {
-                    voxels.within(&to_voxel, to, OFF_VOXELS)
+                    (voxels.within(&to_voxel, to, OFF_VOXELS)
+                        || fitting.both_ways && voxels.nearer(&to_voxel, p, to))
                         && keeps_shapes(mesh, ring, v as u32, to, turn, floor)
                         && envelope::held(mesh, Some(&mut held), ring, v as u32, to, &mut after)
                 });
@@ -428,8 +454,8 @@ pub fn fit(
     held.carry_loose(&bvh);
     (report.far, report.farthest) = beyond(&loose(&held, &bvh));
     if fitting.both_ways {
-        (report.faces_off, report.farthest_off) =
-            beyond(&off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE));
+        let (faces, farthest) = beyond(&off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE));
+        (report.faces_off, report.farthest_off) = (Some(faces), farthest);
     }
     Ok((report, held))
 }
@@ -744,6 +770,138 @@ mod tests {
         // Still a closed surface with the decimation's angles.
         assert!(report.min_angle >= MIN_ANGLE, "{}", report.min_angle);
     }
+
+    #[test]
+    fn the_nearest_point_of_the_voxel_faces_is_the_nearest_of_all() {
+        let volume = finned_ball();
+        let inside: Vec<bool> = volume.values.iter().map(|&v| v == 1.0).collect();
+        let voxels = Voxels {
+            volume: &volume,
+            inside: &inside,
+        };
+        let mut faces = Vec::new();
+        for z in -1..36i64 {
+            for y in -1..36i64 {
+                for x in -1..36i64 {
+                    for axis in 0..3 {
+                        let mut next = [x, y, z];
+                        next[axis] += 1;
+                        if voxels.at(x, y, z) != voxels.at(next[0], next[1], next[2]) {
+                            let mut centre = DVec3::new(x as f64, y as f64, z as f64);
+                            centre[axis] += 0.5;
+                            faces.push((centre, axis));
+                        }
+                    }
+                }
+            }
+        }
+        let to_voxel = volume.to_world.inverse();
+        // Points inside, outside, near the fins and far from everything
+        // (towards the corners of the grid, 20 voxels from the fins).
+        let (mut widened, mut none) = (0, 0);
+        for k in 0..400 {
+            let q = DVec3::new(
+                (k * 7 % 40) as f64 - 2.3,
+                (k * 13 % 40) as f64 - 2.7,
+                (k * 29 % 40) as f64 - 2.1,
+            );
+            let brute = faces
+                .iter()
+                .map(|&(c, a)| off_face(q, c, a).length())
+                .fold(f64::INFINITY, f64::min);
+            let p = volume.to_world.transform_point3(q);
+            match voxels.nearest_on_faces(&to_voxel, p) {
+                Some(found) => {
+                    let distance = to_voxel.transform_point3(found).distance(q);
+                    assert!(
+                        (distance - brute).abs() < 1e-9,
+                        "{q}: {distance} against {brute}"
+                    );
+                    widened += (brute > 2.0) as usize;
+                }
+                None => {
+                    assert!(brute > 16.0, "{q}: none found, {brute} away");
+                    none += 1;
+                }
+            }
+            assert_eq!(voxels.within(&to_voxel, p, 1.0), brute <= 1.0, "{q}");
+        }
+        // The search widened past two voxels, and gave up past sixteen.
+        assert!(widened > 0 && none > 0, "{widened} {none}");
+    }
+
+    #[test]
+    fn held_within_its_voxels_the_surface_and_its_voxel_faces_meet_both_ways() {
+        // Every point of the voxel faces within a voxel of the surface, and
+        // every point of the surface within a voxel of the voxel faces,
+        // checked by brute force.
+        let volume = finned_ball();
+        let opts = MeshOptions {
+            region: Region::Label(1),
+            smooth: crate::segment::DEFAULT_SMOOTH,
+            smoother: Smoother::Taubin,
+            all_components: false,
+            fill_voids: false,
+            faces: Some(FACES_BOTH_WAYS),
+            max_handle: None,
+            within_voxels: Some(TOLERANCE),
+        };
+        let (surface, report) = mesh(&volume, Path::new("finned.nii"), &opts, &Silent).unwrap();
+        let fit = report.fit;
+        let inside: Vec<bool> = volume.values.iter().map(|&v| v == 1.0).collect();
+        let voxels = Voxels {
+            volume: &volume,
+            inside: &inside,
+        };
+        let points = voxels.face_points();
+        assert_eq!(fit.points, points.len());
+        let farthest = points
+            .iter()
+            .map(|&p| {
+                (0..surface.num_faces())
+                    .map(|f| closest_point(p, &surface.corners(f)).distance(p))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+            / 0.8;
+        assert!(
+            farthest <= 1.0,
+            "a voxel-face point {farthest} voxels off ({fit:?})"
+        );
+        let to_voxel = volume.to_world.inverse();
+        let mut off: f64 = 0.0;
+        for f in 0..surface.num_faces() {
+            let t = surface.corners(f);
+            for (u, v) in [
+                (0.0, 0.0),
+                (1.0, 0.0),
+                (0.0, 1.0),
+                (1.0 / 3.0, 1.0 / 3.0),
+                (0.5, 0.0),
+                (0.5, 0.5),
+                (0.0, 0.5),
+            ] {
+                let q = t[0] * (1.0 - u - v) + t[1] * u + t[2] * v;
+                let n = voxels.nearest_on_faces(&to_voxel, q).unwrap();
+                off = off.max(n.distance(q) / 0.8);
+            }
+        }
+        assert!(
+            off <= 1.0,
+            "a point of the surface {off} voxels off ({fit:?})"
+        );
+        assert!(
+            fit.farthest_off.is_none_or(|d| d <= 1.0) && fit.faces_off.is_some(),
+            "{fit:?}"
+        );
+        assert!(report.min_angle >= MIN_ANGLE, "{}", report.min_angle);
+    }
+
+    /// Decimated to this within its voxels, a point of the finned ball's
+    /// voxel faces lies 1.005 voxels from the surface before the last fit
+    /// (within a voxel after it); at 400, 800 or 1000 faces the decimation
+    /// alone keeps them within.
+    const FACES_BOTH_WAYS: usize = 600;
 
     /// Decimated to this, the fins' crests are cut by more than a voxel
     /// (1.19 before the fit, 0.96 after).

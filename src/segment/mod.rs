@@ -410,10 +410,7 @@ pub fn mesh(
             // the MNI white matter at 50k faces: 0.99 / 0.98 voxels
             // against 1.14 / 1.14 with the corners alone, 2 s more).
             Some(within) if within <= fit::TOLERANCE => {
-                let points = voxel_corners.face_points();
-                let bvh = Bvh::over_faces(&mesh);
-                held = Some(Envelope::holding(&bvh, points, fit::TOLERANCE * voxel));
-                fitting = fit::BOTH_WAYS;
+                (held, fitting) = (None, fit::BOTH_WAYS);
             }
             // The fit holds the corners within its own tolerance.
             Some(_) => held = held.map(|e| e.released(fit::TOLERANCE * voxel)),

@@ -187,6 +187,17 @@ impl Voxels<'_> {
             .collect()
     }
 
+    /// The axes along which voxel `v`'s face on its upper side lies between
+    /// an inside voxel and an outside one.
+    fn boundary_axes(&self, v: [i64; 3]) -> impl Iterator<Item = usize> + '_ {
+        let here = self.at(v[0], v[1], v[2]);
+        (0..3).filter(move |&axis| {
+            let mut next = v;
+            next[axis] += 1;
+            self.at(next[0], next[1], next[2]) != here
+        })
+    }
+
     /// The points compare_mesh.py measures a surface's distance from: the
     /// nine of each face between an inside voxel and an outside one (its
     /// corners, its edges' midpoints, its centre), each once, in world
@@ -202,13 +213,7 @@ impl Voxels<'_> {
                 let mut slab = Vec::new();
                 for y in -1..ny {
                     for x in -1..nx {
-                        let here = self.at(x, y, z);
-                        for axis in 0..3 {
-                            let mut next = [x, y, z];
-                            next[axis] += 1;
-                            if self.at(next[0], next[1], next[2]) == here {
-                                continue;
-                            }
+                        for axis in self.boundary_axes([x, y, z]) {
                             let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
                             let mut centre = [2 * x, 2 * y, 2 * z];
                             centre[axis] += 1;
@@ -281,13 +286,7 @@ impl Voxels<'_> {
             for z in c.z - r..=c.z + r {
                 for y in c.y - r..=c.y + r {
                     for x in c.x - r..=c.x + r {
-                        let here = self.at(x, y, z);
-                        for axis in 0..3 {
-                            let mut next = [x, y, z];
-                            next[axis] += 1;
-                            if self.at(next[0], next[1], next[2]) == here {
-                                continue;
-                            }
+                        for axis in self.boundary_axes([x, y, z]) {
                             let mut centre = DVec3::new(x as f64, y as f64, z as f64);
                             centre[axis] += 0.5;
                             let point = q - off_face(q, centre, axis);
@@ -672,20 +671,65 @@ mod tests {
         }
     }
 
-    #[test]
-    fn every_voxel_corner_ends_within_a_voxel_of_the_surface() {
-        let volume = finned_ball();
+    /// The finned ball meshed to `faces`, held `within_voxels`.
+    fn finned_surface(
+        volume: &ScalarVolume,
+        faces: usize,
+        within_voxels: Option<f64>,
+    ) -> (TriMesh, crate::segment::MeshReport) {
         let opts = MeshOptions {
             region: Region::Label(1),
             smooth: crate::segment::DEFAULT_SMOOTH,
             smoother: Smoother::Taubin,
             all_components: false,
             fill_voids: false,
-            faces: Some(FACES),
+            faces: Some(faces),
             max_handle: None,
-            within_voxels: None,
+            within_voxels,
         };
-        let (surface, report) = mesh(&volume, Path::new("finned.nii"), &opts, &Silent).unwrap();
+        mesh(volume, Path::new("finned.nii"), &opts, &Silent).unwrap()
+    }
+
+    /// Every face between an inside voxel and an outside one of the finned
+    /// ball's grid (outside it counts as outside), by brute force: the
+    /// voxel on its lower side and the axis it faces along.
+    fn boundary_faces(voxels: &Voxels) -> Vec<([i64; 3], usize)> {
+        let mut faces = Vec::new();
+        for z in -1..36i64 {
+            for y in -1..36i64 {
+                for x in -1..36i64 {
+                    for axis in 0..3 {
+                        let mut next = [x, y, z];
+                        next[axis] += 1;
+                        // Not `boundary_axes`: the test checks it.
+                        if voxels.at(x, y, z) != voxels.at(next[0], next[1], next[2]) {
+                            faces.push(([x, y, z], axis));
+                        }
+                    }
+                }
+            }
+        }
+        faces
+    }
+
+    /// The farthest of `points` from `surface`, by brute force, voxels of
+    /// 0.8.
+    fn farthest_from(surface: &TriMesh, points: &[DVec3]) -> f64 {
+        points
+            .iter()
+            .map(|&p| {
+                (0..surface.num_faces())
+                    .map(|f| closest_point(p, &surface.corners(f)).distance(p))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+            / 0.8
+    }
+
+    #[test]
+    fn every_voxel_corner_ends_within_a_voxel_of_the_surface() {
+        let volume = finned_ball();
+        let (surface, report) = finned_surface(&volume, FACES, None);
         let fit = report.fit;
         // Decimated this far, the surface had left corners more than a
         // voxel behind.
@@ -724,23 +768,13 @@ mod tests {
             .map(|p| (*p / 0.4).round().as_i64vec3().to_array())
             .collect();
         assert_eq!(halves.len(), points.len(), "each point once");
-        let mut faces = 0;
-        for z in -1..36i64 {
-            for y in -1..36i64 {
-                for x in -1..36i64 {
-                    for axis in 0..3 {
-                        let mut next = [x, y, z];
-                        next[axis] += 1;
-                        if voxels.at(x, y, z) != voxels.at(next[0], next[1], next[2]) {
-                            faces += 1;
-                            let mut centre = [2 * x, 2 * y, 2 * z];
-                            centre[axis] += 1;
-                            assert!(halves.contains(&centre), "{centre:?}");
-                        }
-                    }
-                }
-            }
+        let faces = boundary_faces(&voxels);
+        for &([x, y, z], axis) in &faces {
+            let mut centre = [2 * x, 2 * y, 2 * z];
+            centre[axis] += 1;
+            assert!(halves.contains(&centre), "{centre:?}");
         }
+        let faces = faces.len();
         for c in &corners {
             assert!(halves.contains(&(*c / 0.4).round().as_i64vec3().to_array()));
         }
@@ -749,15 +783,7 @@ mod tests {
         // shared by two of them.
         let midpoints = points.len() - faces - corners.len();
         assert_eq!(midpoints, 2 * faces);
-        let farthest = corners
-            .iter()
-            .map(|&p| {
-                (0..surface.num_faces())
-                    .map(|f| closest_point(p, &surface.corners(f)).distance(p))
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .fold(0.0, f64::max)
-            / 0.8;
+        let farthest = farthest_from(&surface, &corners);
         assert!(
             farthest <= 1.0,
             "a voxel corner {farthest} voxels from the surface ({fit:?})"
@@ -779,22 +805,14 @@ mod tests {
             volume: &volume,
             inside: &inside,
         };
-        let mut faces = Vec::new();
-        for z in -1..36i64 {
-            for y in -1..36i64 {
-                for x in -1..36i64 {
-                    for axis in 0..3 {
-                        let mut next = [x, y, z];
-                        next[axis] += 1;
-                        if voxels.at(x, y, z) != voxels.at(next[0], next[1], next[2]) {
-                            let mut centre = DVec3::new(x as f64, y as f64, z as f64);
-                            centre[axis] += 0.5;
-                            faces.push((centre, axis));
-                        }
-                    }
-                }
-            }
-        }
+        let faces: Vec<(DVec3, usize)> = boundary_faces(&voxels)
+            .into_iter()
+            .map(|([x, y, z], axis)| {
+                let mut centre = DVec3::new(x as f64, y as f64, z as f64);
+                centre[axis] += 0.5;
+                (centre, axis)
+            })
+            .collect();
         let to_voxel = volume.to_world.inverse();
         // Points inside, outside, near the fins and far from everything
         // (towards the corners of the grid, 20 voxels from the fins).
@@ -836,17 +854,7 @@ mod tests {
         // every point of the surface within a voxel of the voxel faces,
         // checked by brute force.
         let volume = finned_ball();
-        let opts = MeshOptions {
-            region: Region::Label(1),
-            smooth: crate::segment::DEFAULT_SMOOTH,
-            smoother: Smoother::Taubin,
-            all_components: false,
-            fill_voids: false,
-            faces: Some(FACES_BOTH_WAYS),
-            max_handle: None,
-            within_voxels: Some(TOLERANCE),
-        };
-        let (surface, report) = mesh(&volume, Path::new("finned.nii"), &opts, &Silent).unwrap();
+        let (surface, report) = finned_surface(&volume, FACES_BOTH_WAYS, Some(TOLERANCE));
         let fit = report.fit;
         let inside: Vec<bool> = volume.values.iter().map(|&v| v == 1.0).collect();
         let voxels = Voxels {
@@ -855,15 +863,7 @@ mod tests {
         };
         let points = voxels.face_points();
         assert_eq!(fit.points, points.len());
-        let farthest = points
-            .iter()
-            .map(|&p| {
-                (0..surface.num_faces())
-                    .map(|f| closest_point(p, &surface.corners(f)).distance(p))
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .fold(0.0, f64::max)
-            / 0.8;
+        let farthest = farthest_from(&surface, &points);
         assert!(
             farthest <= 1.0,
             "a voxel-face point {farthest} voxels off ({fit:?})"

@@ -404,6 +404,9 @@ pub fn fit(
         .into_iter()
         .map(|(p, _, _)| p)
         .collect();
+    // Where the surface strays from the voxel faces (`off_voxels`, as
+    // `beyond` counts it), while no move has made it stale.
+    let mut strays = None;
     for round in 0..fitting.rounds {
         progress::check(progress)?;
         if round > 0 {
@@ -414,6 +417,8 @@ pub fn fit(
             true => off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE),
             false => Vec::new(),
         };
+        // The surface as it stands strays where `off` says, until a move.
+        strays = Some(beyond(&off));
         if held.loose().is_empty() && off.is_empty() {
             break;
         }
@@ -445,7 +450,9 @@ pub fn fit(
         }
         report.moves += made;
         progress.advance(1);
-        if made == 0 {
+        if made > 0 {
+            strays = None;
+        } else {
             break;
         }
     }
@@ -453,7 +460,8 @@ pub fn fit(
     held.carry_loose(&bvh);
     (report.far, report.farthest) = beyond(&loose(&held, &bvh));
     if fitting.both_ways {
-        let (faces, farthest) = beyond(&off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE));
+        let (faces, farthest) = strays
+            .unwrap_or_else(|| beyond(&off_voxels(mesh, voxels, &to_voxel, voxel, TOLERANCE)));
         (report.faces_off, report.farthest_off) = (Some(faces), farthest);
     }
     Ok((report, held))

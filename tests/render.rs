@@ -467,7 +467,9 @@ fn spearman(a: &[f64], b: &[f64]) -> f64 {
 /// saturation <= 0.25) on 0.2-5% of the pixels, in small spots; every
 /// facet's mean colour within the in-vivo frames' hue range and not grey;
 /// luminance falling with the distance from the scope (Spearman <= -0.5),
-/// distance and facet found by casting the pixels' rays at the mesh.
+/// distance and facet found by casting the pixels' rays at the mesh. The
+/// distances the preview's fluid takes from the depth buffer are those
+/// rays' too.
 #[test]
 fn the_default_preview_looks_lit_by_an_endoscope() {
     use rayon::prelude::*;
@@ -476,7 +478,9 @@ fn the_default_preview_looks_lit_by_an_endoscope() {
     let baked = build_scene(&spec, false, &Silent).unwrap();
     let list = DrawList::of(&baked, None);
     let (w, h) = (640u32, 480u32);
-    let img = organtex::render::picture(&gpu, &baked, &list, [w, h], Lighting::Endoscope).unwrap();
+    let (img, medium) =
+        organtex::render::picture_and_medium(&gpu, &baked, &list, [w, h], Lighting::Endoscope)
+            .unwrap();
     let px = |x: u32, y: u32| img.get_pixel(x, y).0.map(|c| c as f64 / 255.0);
 
     // Highlights, and their spots (8-connected).
@@ -589,6 +593,21 @@ fn the_default_preview_looks_lit_by_an_endoscope() {
         }
         s.1 += 1;
     }
+    // The depth buffer's distances against the rays': within 0.5% where
+    // the ray hits (a pixel on a silhouette may see either side).
+    let (mut hit, mut off) = (0, 0);
+    for (&(x, y), ray) in samples.iter().zip(&hits) {
+        let buffer = medium.distance[(y * w + x) as usize] as f64;
+        match ray {
+            Some((t, _)) => {
+                hit += 1;
+                off += ((buffer - t).abs() > 0.005 * t) as usize;
+            }
+            None => off += buffer.is_finite() as usize,
+        }
+    }
+    println!("depth buffer off the rays by > 0.5% at {off} of {hit} pixels");
+    assert!(off * 200 <= hit, "{off} of {hit} distances off the rays");
     let rho = spearman(&depth, &luminance);
     println!(
         "depth-luminance Spearman {rho:.3} over {} pixels",

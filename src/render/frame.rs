@@ -102,7 +102,8 @@ impl Renderer {
                 view: depth,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
+                    // Kept: the preview reads it back (Offscreen::read_depth).
+                    store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
             }),

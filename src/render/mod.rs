@@ -27,4 +27,4 @@ pub use gpu::{Gpu, MAX_TEXTURE_ENV};
 pub use gpu_scene::{CutMesh, GpuScene};
 pub use offscreen::Offscreen;
 pub use pipelines::{Filtering, Renderer};
-pub use preview::{picture, preview, scope_field};
+pub use preview::{Medium, picture, picture_and_medium, preview, scope_field};

@@ -80,7 +80,11 @@ impl Offscreen {
                 }),
             }
         };
-        let depth = texture(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT, &[]);
+        let depth = texture(
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            &[],
+        );
         Offscreen {
             size: [extent.width, extent.height],
             colour_view,
@@ -147,53 +151,128 @@ impl Offscreen {
             Display::Encoded { texture, .. } => texture,
         };
         let [w, h] = self.size;
-        // Rows of a texture-to-buffer copy are padded to 256 bytes.
-        let row = (4 * w).div_ceil(256) * 256;
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: (row * h) as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            shown.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        queue.submit([encoder.finish()]);
-        let slice = buffer.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        rx.recv()
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
-        let mut pixels = Vec::with_capacity((4 * w * h) as usize);
-        for y in 0..h as usize {
-            pixels.extend_from_slice(&data[y * row as usize..y * row as usize + 4 * w as usize]);
-        }
-        drop(data);
-        buffer.unmap();
-        image::RgbaImage::from_raw(w, h, pixels)
+        image::RgbaImage::from_raw(w, h, read_bytes(device, queue, shown, self.size)?)
             .ok_or_else(|| Error::invalid("GPU readback: fewer bytes than pixels"))
     }
+
+    /// The last frame's depth buffer, row by row from the top: 0 at the
+    /// near plane, 1 at the far plane and where nothing was drawn. Read
+    /// through `renderer`'s depth-bytes pass, so 24 bits of each depth.
+    pub fn read_depth(
+        &self,
+        renderer: &Renderer,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<f32>> {
+        let bytes = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth bytes"),
+            size: wgpu::Extent3d {
+                width: self.size[0],
+                height: self.size[1],
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DISPLAY_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let depth = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("depth bytes"),
+            layout: &renderer.depth_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&self.depth_view),
+            }],
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth bytes"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &bytes.create_view(&Default::default()),
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&renderer.depth_bytes);
+            pass.set_bind_group(0, &depth, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        queue.submit([encoder.finish()]);
+        let rgba = read_bytes(device, queue, &bytes, self.size)?;
+        Ok(rgba
+            .chunks_exact(4)
+            .map(|p| {
+                let v = (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32;
+                v as f32 / 16_777_215.0
+            })
+            .collect())
+    }
+}
+
+/// The bytes of `texture`, a 4-byte-per-pixel texture `size` pixels,
+/// row by row from the top.
+fn read_bytes(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    [w, h]: [u32; 2],
+) -> Result<Vec<u8>> {
+    // Rows of a texture-to-buffer copy are padded to 256 bytes.
+    let row = (4 * w).div_ceil(256) * 256;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([encoder.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+    rx.recv()
+        .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?
+        .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| Error::invalid(format!("GPU readback: {e}")))?;
+    let mut pixels = Vec::with_capacity((4 * w * h) as usize);
+    for y in 0..h as usize {
+        pixels.extend_from_slice(&data[y * row as usize..y * row as usize + 4 * w as usize]);
+    }
+    drop(data);
+    buffer.unmap();
+    Ok(pixels)
 }

@@ -45,6 +45,11 @@ pub struct Renderer {
     /// device cannot view one texture in two formats (`Offscreen`).
     pub(super) encode_layout: wgpu::BindGroupLayout,
     pub(super) encode: wgpu::RenderPipeline,
+    /// Writes the depth buffer into a plain-bytes texture, to be read
+    /// back (`Offscreen::read_depth`): depth buffers themselves cannot be
+    /// copied out on every backend (GL).
+    pub(super) depth_layout: wgpu::BindGroupLayout,
+    pub(super) depth_bytes: wgpu::RenderPipeline,
 }
 
 /// Reads the sRGB frame (decoded as it is loaded) and writes it encoded
@@ -65,6 +70,28 @@ fn fs_encode(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
     let low = c.rgb * 12.92;
     let high = 1.055 * pow(c.rgb, vec3<f32>(1.0 / 2.4)) - 0.055;
     return vec4<f32>(select(high, low, c.rgb <= vec3<f32>(0.0031308)), c.a);
+}
+";
+
+/// Reads the depth buffer and writes each depth (0..1) as a 24-bit
+/// fraction in red, green and blue, high byte first. The depth texture is
+/// bound as unfilterable float (WebGPU allows it for depth formats): GL
+/// cannot load from a `texture_depth_2d`.
+const DEPTH_BYTES_WGSL: &str = r"
+@group(0) @binding(0) var depth: texture_2d<f32>;
+
+@vertex
+fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_depth_bytes(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    let z = clamp(textureLoad(depth, vec2<i32>(p.xy), 0).r, 0.0, 1.0);
+    let v = u32(z * 16777215.0);
+    let bytes = vec3<u32>(v >> 16u, (v >> 8u) & 255u, v & 255u);
+    return vec4<f32>(vec3<f32>(bytes) / 255.0, 1.0);
 }
 ";
 
@@ -235,7 +262,8 @@ pub(super) fn carve_bind_group(
     })
 }
 
-/// A table read with textureLoad (solid/lst/sample.wgsl).
+/// A table or a frame read with textureLoad (solid/lst/sample.wgsl, the
+/// full-screen passes).
 fn table_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -252,7 +280,10 @@ fn table_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bind
 impl Renderer {
     pub fn new(device: &wgpu::Device, filtering: Filtering) -> Renderer {
         let aniso = filtering.anisotropy();
-        let (encode_layout, encode) = encode_pipeline(device);
+        let (encode_layout, encode) =
+            full_screen_pipeline(device, ("encode", ENCODE_WGSL, "fs_encode"));
+        let (depth_layout, depth_bytes) =
+            full_screen_pipeline(device, ("depth bytes", DEPTH_BYTES_WGSL, "fs_depth_bytes"));
         let [facet_src, cut_src, carved_src] = shader_sources();
         let carved_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("carved.wgsl"),
@@ -521,6 +552,8 @@ impl Renderer {
             ),
             encode_layout,
             encode,
+            depth_layout,
+            depth_bytes,
             globals,
             globals_group,
             material_layout,
@@ -677,31 +710,31 @@ impl Renderer {
     }
 }
 
-fn encode_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
+/// A pass of one triangle over the whole target that loads from one
+/// texture and writes `DISPLAY_FORMAT`: `label`, its WGSL and the
+/// fragment entry point.
+fn full_screen_pipeline(
+    device: &wgpu::Device,
+    (label, wgsl, fragment): (&str, &str, &str),
+) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("encode"),
-        source: wgpu::ShaderSource::Wgsl(ENCODE_WGSL.into()),
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     });
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("encode"),
-        entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        }],
+        label: Some(label),
+        entries: &[table_entry(
+            0,
+            wgpu::TextureSampleType::Float { filterable: false },
+        )],
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("encode"),
+        label: Some(label),
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
     let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("encode"),
+        label: Some(label),
         layout: Some(&pipeline_layout),
         vertex: wgpu::VertexState {
             module: &module,
@@ -714,7 +747,7 @@ fn encode_pipeline(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::Rende
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_encode"),
+            entry_point: Some(fragment),
             compilation_options: Default::default(),
             targets: &[Some(wgpu::ColorTargetState {
                 format: DISPLAY_FORMAT,
@@ -735,7 +768,13 @@ mod tests {
     #[test]
     fn shaders_validate() {
         let [facet, cut, carved] = super::shader_sources();
-        for src in [facet, cut, carved, super::ENCODE_WGSL.to_string()] {
+        for src in [
+            facet,
+            cut,
+            carved,
+            super::ENCODE_WGSL.to_string(),
+            super::DEPTH_BYTES_WGSL.to_string(),
+        ] {
             let module = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
             naga::valid::Validator::new(

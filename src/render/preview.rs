@@ -17,11 +17,76 @@ pub fn preview(
     list: &DrawList,
     size: [u32; 2],
 ) -> Result<image::RgbImage> {
-    let mut picture = picture(gpu, scene, list, size, scene.spec.bake.preview_lighting)?;
+    let (mut picture, medium) =
+        picture_and_medium(gpu, scene, list, size, scene.spec.bake.preview_lighting)?;
     if scene.spec.bake.preview_scope {
-        scope_field(&mut picture);
+        scope_field(&mut picture, Some(&medium));
     }
     Ok(picture)
+}
+
+/// What lies between the scope's lens and the tissue each pixel shows:
+/// the distance along the pixel's ray, row by row from the top (scene
+/// units, infinite where nothing is drawn), and the view's typical depth
+/// (the camera's distance to what it looks at), which the fluid's lengths
+/// are measured in.
+pub struct Medium {
+    pub distance: Vec<f32>,
+    pub typical: f32,
+}
+
+/// `linear` (w x h pixels, linear light) seen through the cavity's
+/// distension fluid, saline with a trace of blood, by the single-scattering
+/// model of underwater imaging (Jaffe 1990; McGlamery 1980):
+/// - the fluid absorbs, the blood in it green and blue more than red
+///   (Beer-Lambert over the light's path from the scope's tip to the
+///   tissue and back, 2d), so the far cavity darkens faster than the
+///   inverse square alone and reddens;
+/// - of what is not absorbed, the light of a pixel at distance d reaches
+///   the lens unscattered with probability exp(-d / l); the rest arrives
+///   scattered forward a little off its ray, a blur of the same light;
+/// - the fluid the scope's light passes through near the lens sends some
+///   back, an even red veil over the field.
+///
+/// So the far cavity's detail and vessels soften and its dark lifts to a
+/// haze, while the near wall, seen through a few millimetres, stays
+/// sharp and bright; a picture equally sharp at every depth reads as a
+/// rendering. The tone curve has already been applied (frame.wgsl): the
+/// fluid acts on the light it gives, an approximation that holds where
+/// that curve is near linear, in the dim far cavity where the fluid
+/// shows.
+fn through_fluid(linear: &mut [[f32; 3]], w: usize, h: usize, medium: &Medium) {
+    // The scattering length l over the typical depth: at the typical
+    // depth two thirds of the light arrives unscattered.
+    const FREE_PATH: f32 = 2.5;
+    // The forward-scattered light's spread (a Gaussian's sigma), of the
+    // picture's height: small angles, as forward scattering is.
+    const SPREAD: f64 = 0.012;
+    // The backscattered veil, linear light: blood-tinged.
+    const VEIL: [f32; 3] = [0.012, 0.0035, 0.0025];
+    // The absorption lengths of red, green and blue over the typical
+    // depth: at the typical depth, red keeps exp(-1) of its light.
+    const ABSORPTION: [f32; 3] = [2.0, 1.45, 1.3];
+    let kept: Vec<f32> = medium
+        .distance
+        .iter()
+        .map(|&d| (-d / (FREE_PATH * medium.typical)).exp())
+        .collect();
+    let everywhere = vec![1.0; w * h];
+    for c in 0..3 {
+        for (p, &d) in linear.iter_mut().zip(&medium.distance) {
+            p[c] *= (-2.0 * d / (ABSORPTION[c] * medium.typical)).exp();
+        }
+        let scattered: Vec<f32> = linear
+            .iter()
+            .zip(&kept)
+            .map(|(p, k)| p[c] * (1.0 - k))
+            .collect();
+        let spread = Plane::new(w, h, scattered).blur((SPREAD * h as f64) as f32, &everywhere);
+        for ((p, k), s) in linear.iter_mut().zip(&kept).zip(&spread.data) {
+            p[c] = p[c] * k + s + VEIL[c];
+        }
+    }
 }
 
 /// The picture as a hysteroscope's optics and sensor give it, in linear
@@ -40,11 +105,18 @@ pub fn preview(
 ///   glints that a real sensor clips;
 /// - the sensor's noise: shot noise growing with the square root of the
 ///   light plus a floor, seeded by the pixel, so the same picture gives
-///   the same bytes.
+///   the same bytes;
+/// - the video chain's compression: the frame as an endoscopy recorder
+///   stores it, a JPEG of quality `VIDEO_QUALITY` (HyperKvasir's frames,
+///   for one, are JPEGs), with its faint 8-pixel blocks and colour
+///   smeared at edges.
+///
+/// With a `medium`, the picture is first seen through the cavity's fluid
+/// (`through_fluid`).
 ///
 /// Real frames have all of these; a picture without them reads as a
 /// rendering.
-pub fn scope_field(img: &mut image::RgbImage) {
+pub fn scope_field(img: &mut image::RgbImage, medium: Option<&Medium>) {
     const BARREL: f64 = 0.15;
     const LATERAL_COLOUR: f64 = 0.004;
     const BLUR: f64 = 0.0007;
@@ -59,7 +131,7 @@ pub fn scope_field(img: &mut image::RgbImage) {
     // again, so a glint stays a white spot, a little softened, as in real
     // frames.
     const CLIPPED: f32 = 4.0;
-    let linear: Vec<[f32; 3]> = img
+    let mut linear: Vec<[f32; 3]> = img
         .pixels()
         .map(|p| {
             let gain = if p.0.iter().all(|&c| c >= 204) {
@@ -70,6 +142,9 @@ pub fn scope_field(img: &mut image::RgbImage) {
             p.0.map(|c| (c as f32 / 255.0).powf(2.2) * gain)
         })
         .collect();
+    if let Some(medium) = medium {
+        through_fluid(&mut linear, w, h, medium);
+    }
     let radius = FIELD * w as f64 / 2.0;
     let centre = (w as f64 / 2.0, h as f64 / 2.0);
     let bilinear = |x: f64, y: f64, c: usize| -> f32 {
@@ -114,6 +189,25 @@ pub fn scope_field(img: &mut image::RgbImage) {
             *v = ((light + noise).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8;
         }
     }
+    *img = video_frame(img);
+}
+
+/// The JPEG quality of an endoscopy recorder's frames.
+const VIDEO_QUALITY: u8 = 80;
+
+/// `img` through a JPEG encoder and decoder at `VIDEO_QUALITY`: the same
+/// bytes for the same picture (the encoder has no randomness).
+fn video_frame(img: &image::RgbImage) -> image::RgbImage {
+    let mut jpeg = Vec::new();
+    let encoded = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, VIDEO_QUALITY)
+        .encode_image(img)
+        .and_then(|()| image::load_from_memory_with_format(&jpeg, image::ImageFormat::Jpeg));
+    match encoded {
+        Ok(frame) => frame.to_rgb8(),
+        // An in-memory JPEG of an RGB picture cannot fail but for memory;
+        // the picture without its compression is still the picture.
+        Err(_) => img.clone(),
+    }
 }
 
 /// `scene` drawn from its first camera under `lighting`.
@@ -124,6 +218,18 @@ pub fn picture(
     size: [u32; 2],
     lighting: Lighting,
 ) -> Result<image::RgbImage> {
+    Ok(picture_and_medium(gpu, scene, list, size, lighting)?.0)
+}
+
+/// `picture`, and each pixel's distance as `Medium` takes it, from the
+/// depth buffer through the camera's inverse projection.
+pub fn picture_and_medium(
+    gpu: &Gpu,
+    scene: &BakedScene,
+    list: &DrawList,
+    size: [u32; 2],
+    lighting: Lighting,
+) -> Result<(image::RgbImage, Medium)> {
     gpu.scoped(|| {
         // A still: worth the sharpest filtering whatever the adapter.
         let renderer = Renderer::new(&gpu.device, Filtering::Sharp);
@@ -138,7 +244,30 @@ pub fn picture(
         };
         let target = Offscreen::new(gpu, &renderer, size);
         target.draw(&renderer, &gpu.device, &gpu.queue, &gpu_scene, &view);
-        Ok(image::DynamicImage::ImageRgba8(target.read(&gpu.device, &gpu.queue)?).to_rgb8())
+        let picture = image::DynamicImage::ImageRgba8(target.read(&gpu.device, &gpu.queue)?);
+        let z = target.read_depth(&renderer, &gpu.device, &gpu.queue)?;
+        let [w, h] = size.map(|s| s as usize);
+        let camera = &view.camera;
+        let inverse = camera.view_proj(w as f64 / h as f64).as_dmat4().inverse();
+        let eye = camera.eye();
+        let distance = z
+            .iter()
+            .enumerate()
+            .map(|(i, &z)| {
+                if z >= 1.0 {
+                    return f32::INFINITY;
+                }
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                let ndc =
+                    glam::DVec3::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, z as f64);
+                inverse.project_point3(ndc).distance(eye) as f32
+            })
+            .collect();
+        let medium = Medium {
+            distance,
+            typical: camera.distance as f32,
+        };
+        Ok((picture.to_rgb8(), medium))
     })
 }
 
@@ -166,9 +295,9 @@ mod tests {
             image::Rgb(if r < disc { [255; 3] } else { [128; 3] })
         });
         let mut framed = picture.clone();
-        scope_field(&mut framed);
+        scope_field(&mut framed, None);
         let mut again = picture.clone();
-        scope_field(&mut again);
+        scope_field(&mut again, None);
         assert_eq!(framed, again, "same picture, same bytes");
         // Past the field's rim (the corners): dark but for the sensor's
         // faint noise.
@@ -188,5 +317,83 @@ mod tests {
         let (mean, spread) = mean_and_spread(&framed, (160 - 8, 120 - 60), 16);
         assert!((mean - 128.0).abs() < 6.0, "mean {mean}");
         assert!((0.3..4.0).contains(&spread), "noise spread {spread}");
+    }
+
+    #[test]
+    fn through_the_fluid_far_detail_softens_and_hazes_while_near_detail_stays() {
+        // A checkerboard of 4-pixel squares, its left half 3 units from
+        // the lens (the near wall), its right half 100 (the far cavity),
+        // the view's typical depth 35; a black band across the middle
+        // stands for the dark far cavity.
+        let (w, h) = (320u32, 240u32);
+        let picture = image::RgbImage::from_fn(w, h, |x, y| {
+            let dark = (100..140).contains(&y) || (x / 4 + y / 4) % 2 == 0;
+            image::Rgb(if dark { [0; 3] } else { [200, 150, 140] })
+        });
+        let distance: Vec<f32> = (0..w * h)
+            .map(|i| if i % w < w / 2 { 3.0 } else { 100.0 })
+            .collect();
+        let medium = Medium {
+            distance,
+            typical: 35.0,
+        };
+        let mut dry = picture.clone();
+        scope_field(&mut dry, None);
+        let mut wet = picture.clone();
+        scope_field(&mut wet, Some(&medium));
+        let mut again = picture.clone();
+        scope_field(&mut again, Some(&medium));
+        assert_eq!(wet, again, "same picture, same bytes");
+
+        // Green in linear light, where the fluid adds and blurs.
+        let linear = |img: &image::RgbImage, (x0, y0): (u32, u32)| {
+            let v: Vec<f64> = (y0..y0 + 16)
+                .flat_map(|y| (x0..x0 + 16).map(move |x| (x, y)))
+                .map(|(x, y)| (img.get_pixel(x, y).0[1] as f64 / 255.0).powf(2.2))
+                .collect();
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let var = v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64;
+            (mean, var.sqrt())
+        };
+        let (near, far) = ((96, 40), (208, 40));
+        let (near_dry, near_dry_spread) = linear(&dry, near);
+        let (near_wet, near_wet_spread) = linear(&wet, near);
+        let (far_dry, far_dry_spread) = linear(&dry, far);
+        let (far_wet, far_wet_spread) = linear(&wet, far);
+        // Green's share kept from absorption over a path of 2d, and the
+        // veil's green.
+        let unabsorbed = |d: f64| (-2.0 * d / (1.45 * 35.0)).exp();
+        let veil = 0.0035;
+        // Near, 3 units of fluid: the squares keep their contrast and,
+        // but for a little absorption and the veil, their level.
+        assert!(
+            near_wet_spread > 0.9 * unabsorbed(3.0) * near_dry_spread,
+            "near contrast {near_wet_spread} against {near_dry_spread} dry"
+        );
+        let near_level = near_dry * unabsorbed(3.0) + veil;
+        assert!(
+            (near_wet - near_level).abs() < 0.004,
+            "near level {near_wet} against {near_level}"
+        );
+        // Far, 100 units: most of the light arrives scattered, so the
+        // squares blur into their mean; what is not absorbed is not lost.
+        assert!(
+            far_wet_spread < 0.5 * unabsorbed(100.0) * far_dry_spread,
+            "far contrast {far_wet_spread} against {far_dry_spread} dry"
+        );
+        let far_level = far_dry * unabsorbed(100.0) + veil;
+        assert!(
+            (far_wet - far_level).abs() < 0.002,
+            "far level {far_wet} against {far_level}"
+        );
+        // The black band, far: lifted to a dim red haze (the veil, and
+        // the far squares' scattered light, reddened by the blood's
+        // absorption), redder than it is green.
+        let haze = wet.get_pixel(3 * w / 4, h / 2).0;
+        assert!(dry.get_pixel(3 * w / 4, h / 2).0[0] < 16);
+        assert!(
+            (16..90).contains(&haze[0]) && haze[0] > haze[1] + 8,
+            "haze {haze:?}"
+        );
     }
 }

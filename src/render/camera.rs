@@ -94,11 +94,18 @@ impl OrbitCamera {
         ) * view
     }
 
+    /// From clip space (x, y from -1 at the left and bottom to 1, depth
+    /// from 0 at the near plane to 1 at the far one) back to the scene, on
+    /// a view `aspect` wide to high: `project_point3` of its result.
+    pub fn unprojection(&self, aspect: f64) -> glam::DMat4 {
+        self.view_proj(aspect).as_dmat4().inverse()
+    }
+
     /// The ray from the eye through a point of the view: `x` and `y` from
     /// -1 (left, bottom) to 1 (right, top), on a view `aspect` wide to
     /// high. Origin and unit direction.
     pub fn ray(&self, x: f64, y: f64, aspect: f64) -> (DVec3, DVec3) {
-        let inverse = self.view_proj(aspect).as_dmat4().inverse();
+        let inverse = self.unprojection(aspect);
         let near = inverse.project_point3(DVec3::new(x, y, 0.0));
         let far = inverse.project_point3(DVec3::new(x, y, 1.0));
         let eye = self.eye();

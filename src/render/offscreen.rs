@@ -157,7 +157,7 @@ impl Offscreen {
 
     /// The last frame's depth buffer, row by row from the top: 0 at the
     /// near plane, 1 at the far plane and where nothing was drawn. Read
-    /// through `renderer`'s depth-bytes pass, so 24 bits of each depth.
+    /// through `renderer`'s depth-bytes pass, every bit of each depth.
     pub fn read_depth(
         &self,
         renderer: &Renderer,
@@ -178,13 +178,23 @@ impl Offscreen {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
+        let nearest = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("depth bytes"),
+            ..Default::default()
+        });
         let depth = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("depth bytes"),
             layout: &renderer.depth_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&self.depth_view),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&self.depth_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&nearest),
+                },
+            ],
         });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
@@ -212,10 +222,7 @@ impl Offscreen {
         let rgba = read_bytes(device, queue, &bytes, self.size)?;
         Ok(rgba
             .chunks_exact(4)
-            .map(|p| {
-                let v = (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32;
-                v as f32 / 16_777_215.0
-            })
+            .map(|p| f32::from_be_bytes([p[0], p[1], p[2], p[3]]))
             .collect())
     }
 }

@@ -52,17 +52,20 @@ pub struct Renderer {
     pub(super) depth_bytes: wgpu::RenderPipeline,
 }
 
-/// Reads the sRGB frame (decoded as it is loaded) and writes it encoded
-/// again into a texture whose format is not sRGB: the same bytes.
-const ENCODE_WGSL: &str = r"
-@group(0) @binding(0) var frame: texture_2d<f32>;
-
+/// The vertex stage of the full-screen passes: one triangle over the
+/// whole target, no vertex buffer.
+const FULL_SCREEN_VS: &str = r"
 @vertex
 fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    // One triangle over the whole target.
     let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
     return vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
 }
+";
+
+/// Reads the sRGB frame (decoded as it is loaded) and writes it encoded
+/// again into a texture whose format is not sRGB: the same bytes.
+const ENCODE_FS: &str = r"
+@group(0) @binding(0) var frame: texture_2d<f32>;
 
 @fragment
 fn fs_encode(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
@@ -73,27 +76,29 @@ fn fs_encode(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
 }
 ";
 
-/// Reads the depth buffer and writes each depth (0..1) as a 24-bit
-/// fraction in red, green and blue, high byte first. The depth texture is
-/// bound as unfilterable float (WebGPU allows it for depth formats): GL
-/// cannot load from a `texture_depth_2d`.
-const DEPTH_BYTES_WGSL: &str = r"
+/// Reads the depth buffer and writes each depth's 32 bits into red,
+/// green, blue and alpha, high byte first. The depth texture is bound as
+/// unfilterable float (WebGPU allows it for depth formats), since GL
+/// cannot load from a `texture_depth_2d`, and read through a nearest
+/// sampler at each texel's centre: GLES counts a depth texture without
+/// nearest filtering as incomplete, and `textureLoad` binds no sampler.
+const DEPTH_BYTES_FS: &str = r"
 @group(0) @binding(0) var depth: texture_2d<f32>;
-
-@vertex
-fn vs_full(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
-}
+@group(0) @binding(1) var nearest: sampler;
 
 @fragment
 fn fs_depth_bytes(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
-    let z = clamp(textureLoad(depth, vec2<i32>(p.xy), 0).r, 0.0, 1.0);
-    let v = u32(z * 16777215.0);
-    let bytes = vec3<u32>(v >> 16u, (v >> 8u) & 255u, v & 255u);
-    return vec4<f32>(vec3<f32>(bytes) / 255.0, 1.0);
+    let size = vec2<f32>(textureDimensions(depth));
+    let v = bitcast<u32>(textureSampleLevel(depth, nearest, p.xy / size, 0.0).r);
+    let bytes = vec4<u32>(v >> 24u, (v >> 16u) & 255u, (v >> 8u) & 255u, v & 255u);
+    return vec4<f32>(bytes) / 255.0;
 }
 ";
+
+/// A full-screen pass's WGSL: the shared vertex stage and `fragment`.
+fn full_screen_source(fragment: &str) -> String {
+    format!("{FULL_SCREEN_VS}{fragment}")
+}
 
 fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -281,9 +286,12 @@ impl Renderer {
     pub fn new(device: &wgpu::Device, filtering: Filtering) -> Renderer {
         let aniso = filtering.anisotropy();
         let (encode_layout, encode) =
-            full_screen_pipeline(device, ("encode", ENCODE_WGSL, "fs_encode"));
-        let (depth_layout, depth_bytes) =
-            full_screen_pipeline(device, ("depth bytes", DEPTH_BYTES_WGSL, "fs_depth_bytes"));
+            full_screen_pipeline(device, ("encode", ENCODE_FS, "fs_encode"), false);
+        let (depth_layout, depth_bytes) = full_screen_pipeline(
+            device,
+            ("depth bytes", DEPTH_BYTES_FS, "fs_depth_bytes"),
+            true,
+        );
         let [facet_src, cut_src, carved_src] = shader_sources();
         let carved_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("carved.wgsl"),
@@ -710,23 +718,34 @@ impl Renderer {
     }
 }
 
-/// A pass of one triangle over the whole target that loads from one
-/// texture and writes `DISPLAY_FORMAT`: `label`, its WGSL and the
-/// fragment entry point.
+/// A pass of one triangle over the whole target that reads one
+/// unfilterable texture (binding 0), with a non-filtering sampler
+/// (binding 1) if `sampled`, and writes `DISPLAY_FORMAT`: `label`, its
+/// fragment stage's WGSL and entry point.
 fn full_screen_pipeline(
     device: &wgpu::Device,
-    (label, wgsl, fragment): (&str, &str, &str),
+    (label, fragment_wgsl, fragment): (&str, &str, &str),
+    sampled: bool,
 ) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        source: wgpu::ShaderSource::Wgsl(full_screen_source(fragment_wgsl).into()),
     });
+    let texture = table_entry(0, wgpu::TextureSampleType::Float { filterable: false });
+    let sampler = wgpu::BindGroupLayoutEntry {
+        binding: 1,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+        count: None,
+    };
+    let entries = if sampled {
+        &[texture, sampler][..]
+    } else {
+        &[texture][..]
+    };
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
-        entries: &[table_entry(
-            0,
-            wgpu::TextureSampleType::Float { filterable: false },
-        )],
+        entries,
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -772,8 +791,8 @@ mod tests {
             facet,
             cut,
             carved,
-            super::ENCODE_WGSL.to_string(),
-            super::DEPTH_BYTES_WGSL.to_string(),
+            super::full_screen_source(super::ENCODE_FS),
+            super::full_screen_source(super::DEPTH_BYTES_FS),
         ] {
             let module = naga::front::wgsl::parse_str(&src)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));

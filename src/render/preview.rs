@@ -20,7 +20,7 @@ pub fn preview(
     let (mut picture, medium) =
         picture_and_medium(gpu, scene, list, size, scene.spec.bake.preview_lighting)?;
     if scene.spec.bake.preview_scope {
-        scope_field(&mut picture, Some(&medium));
+        scope_field(&mut picture, Some(&medium))?;
     }
     Ok(picture)
 }
@@ -29,24 +29,43 @@ pub fn preview(
 /// the distance along the pixel's ray, row by row from the top (scene
 /// units, infinite where nothing is drawn), and the view's typical depth
 /// (the camera's distance to what it looks at), which the fluid's lengths
-/// are measured in.
+/// are measured in, as the renderer measures its light's falloff
+/// (frame.wgsl), so a scene drawn at another scale looks the same.
 pub struct Medium {
     pub distance: Vec<f32>,
     pub typical: f32,
 }
 
+/// The scattering length over the typical depth: at the typical depth two
+/// thirds of the light arrives unscattered.
+const FREE_PATH: f32 = 2.5;
+/// The forward-scattered light's spread (a Gaussian's sigma), of the
+/// picture's height: small angles, as forward scattering is.
+const SPREAD: f64 = 0.012;
+/// The backscattered veil, linear light: blood-tinged.
+const VEIL: [f32; 3] = [0.012, 0.0035, 0.0025];
+/// The absorption lengths of red, green and blue over the typical depth:
+/// at the typical depth, red keeps exp(-1) of its light. Chosen by eye
+/// for a faint reddening with depth, not derived from haemoglobin's
+/// extinction (which would make green and blue far shorter, for the
+/// unknown, small share of blood in the saline).
+const ABSORPTION: [f32; 3] = [2.0, 1.45, 1.3];
+
 /// `linear` (w x h pixels, linear light) seen through the cavity's
 /// distension fluid, saline with a trace of blood, by the single-scattering
 /// model of underwater imaging (Jaffe 1990; McGlamery 1980):
-/// - the fluid absorbs, the blood in it green and blue more than red
-///   (Beer-Lambert over the light's path from the scope's tip to the
-///   tissue and back, 2d), so the far cavity darkens faster than the
-///   inverse square alone and reddens;
+/// - the fluid absorbs, green and blue more than red (Beer-Lambert over
+///   the light's path from the scope's tip to the tissue and back, 2d),
+///   so the far cavity darkens faster than the inverse square alone and
+///   reddens;
 /// - of what is not absorbed, the light of a pixel at distance d reaches
 ///   the lens unscattered with probability exp(-d / l); the rest arrives
 ///   scattered forward a little off its ray, a blur of the same light;
-/// - the fluid the scope's light passes through near the lens sends some
-///   back, an even red veil over the field.
+/// - the fluid the scope's light passes through sends some back: an even
+///   veil over the field, the same whatever the distance, because the
+///   light leaves the lens itself and falls off with the square of the
+///   distance, so nearly all of the backscatter comes from the first few
+///   millimetres in front of the lens, which every ray crosses.
 ///
 /// So the far cavity's detail and vessels soften and its dark lifts to a
 /// haze, while the near wall, seen through a few millimetres, stays
@@ -56,18 +75,8 @@ pub struct Medium {
 /// that curve is near linear, in the dim far cavity where the fluid
 /// shows.
 fn through_fluid(linear: &mut [[f32; 3]], w: usize, h: usize, medium: &Medium) {
-    // The scattering length l over the typical depth: at the typical
-    // depth two thirds of the light arrives unscattered.
-    const FREE_PATH: f32 = 2.5;
-    // The forward-scattered light's spread (a Gaussian's sigma), of the
-    // picture's height: small angles, as forward scattering is.
-    const SPREAD: f64 = 0.012;
-    // The backscattered veil, linear light: blood-tinged.
-    const VEIL: [f32; 3] = [0.012, 0.0035, 0.0025];
-    // The absorption lengths of red, green and blue over the typical
-    // depth: at the typical depth, red keeps exp(-1) of its light.
-    const ABSORPTION: [f32; 3] = [2.0, 1.45, 1.3];
-    let kept: Vec<f32> = medium
+    assert_eq!(medium.distance.len(), w * h, "a distance for each pixel");
+    let unscattered: Vec<f32> = medium
         .distance
         .iter()
         .map(|&d| (-d / (FREE_PATH * medium.typical)).exp())
@@ -79,11 +88,11 @@ fn through_fluid(linear: &mut [[f32; 3]], w: usize, h: usize, medium: &Medium) {
         }
         let scattered: Vec<f32> = linear
             .iter()
-            .zip(&kept)
+            .zip(&unscattered)
             .map(|(p, k)| p[c] * (1.0 - k))
             .collect();
         let spread = Plane::new(w, h, scattered).blur((SPREAD * h as f64) as f32, &everywhere);
-        for ((p, k), s) in linear.iter_mut().zip(&kept).zip(&spread.data) {
+        for ((p, k), s) in linear.iter_mut().zip(&unscattered).zip(&spread.data) {
             p[c] = p[c] * k + s + VEIL[c];
         }
     }
@@ -116,7 +125,7 @@ fn through_fluid(linear: &mut [[f32; 3]], w: usize, h: usize, medium: &Medium) {
 ///
 /// Real frames have all of these; a picture without them reads as a
 /// rendering.
-pub fn scope_field(img: &mut image::RgbImage, medium: Option<&Medium>) {
+pub fn scope_field(img: &mut image::RgbImage, medium: Option<&Medium>) -> Result<()> {
     const BARREL: f64 = 0.15;
     const LATERAL_COLOUR: f64 = 0.004;
     const BLUR: f64 = 0.0007;
@@ -189,7 +198,8 @@ pub fn scope_field(img: &mut image::RgbImage, medium: Option<&Medium>) {
             *v = ((light + noise).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8;
         }
     }
-    *img = video_frame(img);
+    *img = video_frame(img)?;
+    Ok(())
 }
 
 /// The JPEG quality of an endoscopy recorder's frames.
@@ -197,17 +207,13 @@ const VIDEO_QUALITY: u8 = 80;
 
 /// `img` through a JPEG encoder and decoder at `VIDEO_QUALITY`: the same
 /// bytes for the same picture (the encoder has no randomness).
-fn video_frame(img: &image::RgbImage) -> image::RgbImage {
+fn video_frame(img: &image::RgbImage) -> Result<image::RgbImage> {
     let mut jpeg = Vec::new();
-    let encoded = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, VIDEO_QUALITY)
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, VIDEO_QUALITY)
         .encode_image(img)
-        .and_then(|()| image::load_from_memory_with_format(&jpeg, image::ImageFormat::Jpeg));
-    match encoded {
-        Ok(frame) => frame.to_rgb8(),
-        // An in-memory JPEG of an RGB picture cannot fail but for memory;
-        // the picture without its compression is still the picture.
-        Err(_) => img.clone(),
-    }
+        .and_then(|()| image::load_from_memory_with_format(&jpeg, image::ImageFormat::Jpeg))
+        .map(|frame| frame.to_rgb8())
+        .map_err(|e| crate::error::Error::invalid(format!("the preview's JPEG compression: {e}")))
 }
 
 /// `scene` drawn from its first camera under `lighting`.
@@ -245,12 +251,12 @@ pub fn picture_and_medium(
         let target = Offscreen::new(gpu, &renderer, size);
         target.draw(&renderer, &gpu.device, &gpu.queue, &gpu_scene, &view);
         let picture = image::DynamicImage::ImageRgba8(target.read(&gpu.device, &gpu.queue)?);
-        let z = target.read_depth(&renderer, &gpu.device, &gpu.queue)?;
-        let [w, h] = size.map(|s| s as usize);
+        let depth = target.read_depth(&renderer, &gpu.device, &gpu.queue)?;
+        let [w, h] = target.size.map(|s| s as usize);
         let camera = &view.camera;
-        let inverse = camera.view_proj(w as f64 / h as f64).as_dmat4().inverse();
+        let inverse = camera.unprojection(w as f64 / h as f64);
         let eye = camera.eye();
-        let distance = z
+        let distance = depth
             .iter()
             .enumerate()
             .map(|(i, &z)| {
@@ -295,9 +301,9 @@ mod tests {
             image::Rgb(if r < disc { [255; 3] } else { [128; 3] })
         });
         let mut framed = picture.clone();
-        scope_field(&mut framed, None);
+        scope_field(&mut framed, None).unwrap();
         let mut again = picture.clone();
-        scope_field(&mut again, None);
+        scope_field(&mut again, None).unwrap();
         assert_eq!(framed, again, "same picture, same bytes");
         // Past the field's rim (the corners): dark but for the sensor's
         // faint noise.
@@ -321,79 +327,81 @@ mod tests {
 
     #[test]
     fn through_the_fluid_far_detail_softens_and_hazes_while_near_detail_stays() {
-        // A checkerboard of 4-pixel squares, its left half 3 units from
-        // the lens (the near wall), its right half 100 (the far cavity),
-        // the view's typical depth 35; a black band across the middle
-        // stands for the dark far cavity.
-        let (w, h) = (320u32, 240u32);
-        let picture = image::RgbImage::from_fn(w, h, |x, y| {
-            let dark = (100..140).contains(&y) || (x / 4 + y / 4) % 2 == 0;
-            image::Rgb(if dark { [0; 3] } else { [200, 150, 140] })
-        });
+        // In linear light, a checkerboard of 4-pixel squares (0 and 0.5),
+        // its left half 3 units from the lens (the near wall), its right
+        // half 100 (the far cavity); the view's typical depth 35. Its
+        // bottom rows see nothing (infinite distance).
+        let (w, h) = (320usize, 240usize);
+        let checker: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| [((i % w / 4 + i / w / 4) % 2) as f32 * 0.5; 3])
+            .collect();
         let distance: Vec<f32> = (0..w * h)
-            .map(|i| if i % w < w / 2 { 3.0 } else { 100.0 })
+            .map(|i| match (i % w < w / 2, i / w < h - 20) {
+                (_, false) => f32::INFINITY,
+                (true, true) => 3.0,
+                (false, true) => 100.0,
+            })
             .collect();
         let medium = Medium {
             distance,
             typical: 35.0,
         };
-        let mut dry = picture.clone();
-        scope_field(&mut dry, None);
-        let mut wet = picture.clone();
-        scope_field(&mut wet, Some(&medium));
-        let mut again = picture.clone();
-        scope_field(&mut again, Some(&medium));
-        assert_eq!(wet, again, "same picture, same bytes");
-
-        // Green in linear light, where the fluid adds and blurs.
-        let linear = |img: &image::RgbImage, (x0, y0): (u32, u32)| {
+        let mut wet = checker.clone();
+        through_fluid(&mut wet, w, h, &medium);
+        // Mean and spread of one channel over a 16-pixel square.
+        let stats = |img: &[[f32; 3]], (x0, y0): (usize, usize), c: usize| {
             let v: Vec<f64> = (y0..y0 + 16)
-                .flat_map(|y| (x0..x0 + 16).map(move |x| (x, y)))
-                .map(|(x, y)| (img.get_pixel(x, y).0[1] as f64 / 255.0).powf(2.2))
+                .flat_map(|y| (x0..x0 + 16).map(move |x| img[y * w + x][c] as f64))
                 .collect();
             let mean = v.iter().sum::<f64>() / v.len() as f64;
             let var = v.iter().map(|a| (a - mean).powi(2)).sum::<f64>() / v.len() as f64;
             (mean, var.sqrt())
         };
-        let (near, far) = ((96, 40), (208, 40));
-        let (near_dry, near_dry_spread) = linear(&dry, near);
-        let (near_wet, near_wet_spread) = linear(&wet, near);
-        let (far_dry, far_dry_spread) = linear(&dry, far);
-        let (far_wet, far_wet_spread) = linear(&wet, far);
-        // Green's share kept from absorption over a path of 2d, and the
-        // veil's green.
-        let unabsorbed = |d: f64| (-2.0 * d / (1.45 * 35.0)).exp();
-        let veil = 0.0035;
-        // Near, 3 units of fluid: the squares keep their contrast and,
-        // but for a little absorption and the veil, their level.
-        assert!(
-            near_wet_spread > 0.9 * unabsorbed(3.0) * near_dry_spread,
-            "near contrast {near_wet_spread} against {near_dry_spread} dry"
-        );
-        let near_level = near_dry * unabsorbed(3.0) + veil;
-        assert!(
-            (near_wet - near_level).abs() < 0.004,
-            "near level {near_wet} against {near_level}"
-        );
-        // Far, 100 units: most of the light arrives scattered, so the
-        // squares blur into their mean; what is not absorbed is not lost.
-        assert!(
-            far_wet_spread < 0.5 * unabsorbed(100.0) * far_dry_spread,
-            "far contrast {far_wet_spread} against {far_dry_spread} dry"
-        );
-        let far_level = far_dry * unabsorbed(100.0) + veil;
-        assert!(
-            (far_wet - far_level).abs() < 0.002,
-            "far level {far_wet} against {far_level}"
-        );
-        // The black band, far: lifted to a dim red haze (the veil, and
-        // the far squares' scattered light, reddened by the blood's
-        // absorption), redder than it is green.
-        let haze = wet.get_pixel(3 * w / 4, h / 2).0;
-        assert!(dry.get_pixel(3 * w / 4, h / 2).0[0] < 16);
-        assert!(
-            (16..90).contains(&haze[0]) && haze[0] > haze[1] + 8,
-            "haze {haze:?}"
-        );
+        for c in 0..3 {
+            // The share of channel c the fluid leaves over a path of 2d.
+            let unabsorbed = |d: f64| (-2.0 * d / (ABSORPTION[c] as f64 * 35.0)).exp();
+            let unscattered = |d: f64| (-d / (FREE_PATH as f64 * 35.0)).exp();
+            let veil = VEIL[c] as f64;
+            let (near, far) = ((96, 40), (208, 40));
+            let (near_dry, near_dry_spread) = stats(&checker, near, c);
+            let (near_wet, near_wet_spread) = stats(&wet, near, c);
+            let (far_dry, far_dry_spread) = stats(&checker, far, c);
+            let (far_wet, far_wet_spread) = stats(&wet, far, c);
+            // Near, 3 units of fluid: the squares keep nearly all their
+            // contrast and, but for a little absorption and the veil,
+            // their level.
+            assert!(
+                near_wet_spread > 0.95 * unabsorbed(3.0) * near_dry_spread,
+                "near contrast {near_wet_spread} against {near_dry_spread} dry"
+            );
+            let near_level = near_dry * unabsorbed(3.0) + veil;
+            assert!((near_wet - near_level).abs() < 1e-4 * near_level);
+            // Far, 100 units: most of the light arrives scattered, so the
+            // squares keep only their unscattered share's contrast (the
+            // blur takes the rest into their mean); what is not absorbed
+            // is not lost.
+            let kept = unabsorbed(100.0) * unscattered(100.0);
+            assert!(
+                (far_wet_spread - kept * far_dry_spread).abs() < 0.05 * kept * far_dry_spread,
+                "far contrast {far_wet_spread}, {kept} of {far_dry_spread} dry"
+            );
+            let far_level = far_dry * unabsorbed(100.0) + veil;
+            assert!((far_wet - far_level).abs() < 1e-3 * far_level);
+            // Where nothing is seen, the veil alone.
+            assert_eq!(wet[w * h - 1][c], VEIL[c]);
+        }
+        // A red haze: where nothing is seen, red more than twice green.
+        let [r, g, b] = wet[w * h - 1];
+        assert!(r > 2.0 * g && g >= b, "haze {r} {g} {b}");
+
+        // Through the whole scope, the same picture gives the same bytes.
+        let picture = image::RgbImage::from_fn(w as u32, h as u32, |x, y| {
+            image::Rgb(checker[y as usize * w + x as usize].map(|v| (v * 255.0) as u8))
+        });
+        let mut once = picture.clone();
+        scope_field(&mut once, Some(&medium)).unwrap();
+        let mut again = picture.clone();
+        scope_field(&mut again, Some(&medium)).unwrap();
+        assert_eq!(once, again, "same picture, same bytes");
     }
 }

@@ -17,10 +17,17 @@ pub fn preview(
     list: &DrawList,
     size: [u32; 2],
 ) -> Result<image::RgbImage> {
-    let (mut picture, medium) =
-        picture_and_medium(gpu, scene, list, size, scene.spec.bake.preview_lighting)?;
-    if scene.spec.bake.preview_scope {
-        scope_field(&mut picture, Some(&medium))?;
+    let scope = scene.spec.bake.preview_scope;
+    let (mut picture, medium) = draw(
+        gpu,
+        scene,
+        list,
+        size,
+        scene.spec.bake.preview_lighting,
+        scope,
+    )?;
+    if scope {
+        scope_field(&mut picture, medium.as_ref())?;
     }
     Ok(picture)
 }
@@ -34,6 +41,33 @@ pub fn preview(
 pub struct Medium {
     pub distance: Vec<f32>,
     pub typical: f32,
+}
+
+impl Medium {
+    /// The medium of a frame `camera` drew, `w` x `h` pixels, from its
+    /// depth buffer (`Offscreen::read_depth`): each pixel centre's depth
+    /// taken back into the scene through the inverse projection.
+    fn from_depth(depth: &[f32], camera: &OrbitCamera, [w, h]: [usize; 2]) -> Medium {
+        let inverse = camera.unprojection(w as f64 / h as f64);
+        let eye = camera.eye();
+        let distance = depth
+            .iter()
+            .enumerate()
+            .map(|(i, &z)| {
+                if z >= 1.0 {
+                    return f32::INFINITY;
+                }
+                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                let ndc =
+                    glam::DVec3::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, z as f64);
+                inverse.project_point3(ndc).distance(eye) as f32
+            })
+            .collect();
+        Medium {
+            distance,
+            typical: camera.distance as f32,
+        }
+    }
 }
 
 /// The scattering length over the typical depth: at the typical depth two
@@ -224,11 +258,10 @@ pub fn picture(
     size: [u32; 2],
     lighting: Lighting,
 ) -> Result<image::RgbImage> {
-    Ok(picture_and_medium(gpu, scene, list, size, lighting)?.0)
+    Ok(draw(gpu, scene, list, size, lighting, false)?.0)
 }
 
-/// `picture`, and each pixel's distance as `Medium` takes it, from the
-/// depth buffer through the camera's inverse projection.
+/// `picture`, and each pixel's distance as `Medium` takes it.
 pub fn picture_and_medium(
     gpu: &Gpu,
     scene: &BakedScene,
@@ -236,6 +269,20 @@ pub fn picture_and_medium(
     size: [u32; 2],
     lighting: Lighting,
 ) -> Result<(image::RgbImage, Medium)> {
+    let (picture, medium) = draw(gpu, scene, list, size, lighting, true)?;
+    Ok((picture, medium.expect("drawn with its medium")))
+}
+
+/// `picture`, and with `medium` the frame's `Medium` (its depth read
+/// back, a pass and a copy only the scope's fluid needs).
+fn draw(
+    gpu: &Gpu,
+    scene: &BakedScene,
+    list: &DrawList,
+    size: [u32; 2],
+    lighting: Lighting,
+    medium: bool,
+) -> Result<(image::RgbImage, Option<Medium>)> {
     gpu.scoped(|| {
         // A still: worth the sharpest filtering whatever the adapter.
         let renderer = Renderer::new(&gpu.device, Filtering::Sharp);
@@ -251,27 +298,12 @@ pub fn picture_and_medium(
         let target = Offscreen::new(gpu, &renderer, size);
         target.draw(&renderer, &gpu.device, &gpu.queue, &gpu_scene, &view);
         let picture = image::DynamicImage::ImageRgba8(target.read(&gpu.device, &gpu.queue)?);
-        let depth = target.read_depth(&renderer, &gpu.device, &gpu.queue)?;
-        let [w, h] = target.size.map(|s| s as usize);
-        let camera = &view.camera;
-        let inverse = camera.unprojection(w as f64 / h as f64);
-        let eye = camera.eye();
-        let distance = depth
-            .iter()
-            .enumerate()
-            .map(|(i, &z)| {
-                if z >= 1.0 {
-                    return f32::INFINITY;
-                }
-                let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
-                let ndc =
-                    glam::DVec3::new(x / w as f64 * 2.0 - 1.0, 1.0 - y / h as f64 * 2.0, z as f64);
-                inverse.project_point3(ndc).distance(eye) as f32
-            })
-            .collect();
-        let medium = Medium {
-            distance,
-            typical: camera.distance as f32,
+        let medium = if medium {
+            let depth = target.read_depth(&renderer, &gpu.device, &gpu.queue)?;
+            let size = target.size.map(|s| s as usize);
+            Some(Medium::from_depth(&depth, &view.camera, size))
+        } else {
+            None
         };
         Ok((picture.to_rgb8(), medium))
     })

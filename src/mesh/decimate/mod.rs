@@ -197,8 +197,11 @@ impl State {
     }
 
     /// Whether collapsing (a, b) to `to` keeps the surface manifold (the
-    /// link condition: the ends share exactly the two opposite vertices)
-    /// and no face it moves flips or turns far; if so, the worst
+    /// link condition: the ends share exactly the two opposite vertices;
+    /// and not both ends of three neighbours, where the edge is one of a
+    /// tetrahedron's, a closed piece of four faces that the link condition
+    /// would let fold into a doubled triangle) and no face it moves flips
+    /// or turns far; if so, the worst
     /// sharpness (`sharpness`) among the faces round the edge before and
     /// among those it moves after, for the caller's shape rule.
     fn shapes(
@@ -217,7 +220,7 @@ impl State {
             .live_faces(a)
             .filter(|&f| self.triangles[f as usize].contains(&b))
             .count();
-        if across != 2 || shared != 2 {
+        if across != 2 || shared != 2 || na.len() == 3 && nb.len() == 3 {
             return None;
         }
         // A face of no area has no direction of its own to keep: it keeps
@@ -586,15 +589,12 @@ fn collapse(
     let turn = MAX_TURN.to_radians().cos();
     let floor = MIN_ANGLE.to_radians().cos();
     let mut live = s.alive.iter().filter(|&&a| a).count();
-    // A tetrahedron is the smallest closed surface: the link condition
-    // would let it fold into a doubled triangle.
-    let mut vertices = s.removed.iter().filter(|&&r| !r).count();
     let mut since_check = 0;
     while live > faces {
         let Some((cost, a, b)) = heap.pop() else {
             break;
         };
-        if s.removed[a as usize] || s.removed[b as usize] || vertices <= 4 {
+        if s.removed[a as usize] || s.removed[b as usize] {
             continue;
         }
         let current = s.candidate(a, b);
@@ -613,7 +613,6 @@ fn collapse(
         }
         s.collapse(a, b, to);
         live -= 2;
-        vertices -= 1;
         s.neighbours(a, &mut scratch[0]);
         for &w in &scratch[0] {
             if free(w) {
@@ -665,10 +664,9 @@ fn collapse_short_edges(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>)
     lengths.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     let floor = SHORT_EDGE_ANGLE.to_radians().cos();
     let mut scratch = [Vec::new(), Vec::new()];
-    let mut vertices = mesh.num_vertices();
     let mut made = 0;
     for (_, a, b) in lengths {
-        if s.removed[a as usize] || s.removed[b as usize] || vertices <= 4 {
+        if s.removed[a as usize] || s.removed[b as usize] {
             continue;
         }
         if s.positions[a as usize].distance(s.positions[b as usize]) >= limit {
@@ -679,7 +677,6 @@ fn collapse_short_edges(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>)
             && s.held(envelope.as_deref_mut(), (a, b, to), &mut around, &mut after)
         {
             s.collapse(a, b, to);
-            vertices -= 1;
             made += 1;
         }
     }
@@ -709,12 +706,11 @@ fn collapse_needles(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>) -> 
     let mut s = State::new(mesh);
     let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut scratch = [Vec::new(), Vec::new()];
-    let mut vertices = mesh.num_vertices();
     let mut made = 0;
     for f in 0..s.triangles.len() {
         let t = s.triangles[f];
         let p = t.map(|v| s.positions[v as usize]);
-        if !s.alive[f] || vertices <= 4 || sharpness(p[0], p[1], p[2]) <= floor {
+        if !s.alive[f] || sharpness(p[0], p[1], p[2]) <= floor {
             continue;
         }
         // The edge whose collapse leaves the best worst angle.
@@ -730,7 +726,6 @@ fn collapse_needles(mesh: &mut TriMesh, mut envelope: Option<&mut Envelope>) -> 
             && s.held(envelope.as_deref_mut(), (a, b, to), &mut around, &mut after)
         {
             s.collapse(a, b, to);
-            vertices -= 1;
             made += 1;
         }
     }
@@ -900,6 +895,48 @@ mod tests {
             .unwrap()
             .0;
         assert!(met.num_faces() <= budget, "{}", met.num_faces());
+    }
+
+    /// A small closed piece beside a large one (a segmentation's tiny
+    /// void beside its organ: the MNI grey matter has 231) is the cheapest
+    /// to collapse; it stops at a tetrahedron and is not folded into a
+    /// doubled triangle of no volume, which the whole mesh's vertex count
+    /// once let happen (211 such pieces there, their angles 5 degrees).
+    #[test]
+    fn a_small_piece_stops_at_a_tetrahedron() {
+        let large = shapes::icosphere(3);
+        let small = shapes::icosphere(1);
+        let mut mesh = large.clone();
+        let offset = large.positions.len() as u32;
+        mesh.positions.extend(
+            small
+                .positions
+                .iter()
+                .map(|&p| p * 0.01 + DVec3::new(3.0, 0.0, 0.0)),
+        );
+        mesh.triangles
+            .extend(small.triangles.iter().map(|t| t.map(|v| v + offset)));
+        let out = decimate(&mesh, large.num_faces() / 4, 0, None, &Silent)
+            .unwrap()
+            .0;
+        assert_eq!(genus_closed_outward(&out), vec![0, 0]);
+        let r = analyse(out.clone(), false).unwrap().report;
+        assert_eq!(r.components, 2);
+        // The small piece: the faces on the far side of x = 2.
+        let piece: Vec<usize> = (0..out.num_faces())
+            .filter(|&f| out.corners(f)[0].x > 2.0)
+            .collect();
+        assert_eq!(piece.len(), 4, "the small piece kept {} faces", piece.len());
+        let volume: f64 = piece
+            .iter()
+            .map(|&f| {
+                let [a, b, c] = out.corners(f);
+                (a - DVec3::new(3.0, 0.0, 0.0))
+                    .dot((b - DVec3::new(3.0, 0.0, 0.0)).cross(c - DVec3::new(3.0, 0.0, 0.0)))
+            })
+            .sum::<f64>()
+            / 6.0;
+        assert!(volume > 0.0, "the small piece encloses {volume}");
     }
 
     #[test]

@@ -39,10 +39,9 @@ pub(super) fn flatten_tips(
     let (mut around, mut after) = (Vec::new(), Vec::new());
     let mut scratch = [Vec::new(), Vec::new()];
     let mut ring = Vec::new();
-    let mut vertices = mesh.num_vertices();
     let mut made = 0;
     for v in 0..mesh.num_vertices() as u32 {
-        if s.removed[v as usize] || vertices <= 4 {
+        if s.removed[v as usize] {
             continue;
         }
         let faces: Vec<u32> = s.live_faces(v).collect();
@@ -85,7 +84,6 @@ pub(super) fn flatten_tips(
             && s.held(envelope.as_deref_mut(), (a, v, to), &mut around, &mut after)
         {
             s.collapse(a, v, to);
-            vertices -= 1;
             made += 1;
         }
     }

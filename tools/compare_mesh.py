@@ -39,6 +39,7 @@ VOLUMES = ROOT / "tests" / "data" / "volumes"
 CASES = [
     ("white matter at 0.5", "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz", 127.5),
     ("brain, T1 >= 40", "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz", 40.0),
+    ("grey matter at 0.5", "mni_icbm152_gm_tal_nlin_sym_09a_converted.nii.gz", 127.5),
 ]
 
 

@@ -45,7 +45,10 @@ pub struct Args {
     /// Fill the enclosed voids of the kept pieces (a ventricle inside the
     /// white matter, a cyst inside an organ). Default: each void is kept
     /// as an inner shell of the surface, facing into it, so the enclosed
-    /// volume is the tissue's.
+    /// volume is the tissue's; only a void whose shell, smoothed, encloses
+    /// under a sixteenth of a voxel (a probability map's voxel just under
+    /// the threshold, a void of a voxel or two), finer than the scan
+    /// resolves, is filled.
     #[arg(long)]
     fill_voids: bool,
     /// Decimate to at most this many faces: quadric error edge collapses
@@ -184,9 +187,14 @@ pub fn run(args: Args) -> Result<()> {
             f.report.voids,
             if f.report.voids == 1 { "" } else { "s" },
             if f.report.voids_filled {
-                "filled"
+                "filled".to_string()
+            } else if f.report.voids_unresolved > 0 {
+                format!(
+                    "kept as inner shells, but {} whose shells enclosed under a sixteenth of a voxel smoothed, finer than the scan resolves, filled (--fill-voids fills them all)",
+                    f.report.voids_unresolved
+                )
             } else {
-                "kept as inner shells (--fill-voids fills them)"
+                "kept as inner shells (--fill-voids fills them)".to_string()
             }
         );
     }

@@ -180,7 +180,8 @@ pub struct MeshOptions {
     /// Keep every connected piece, not only the largest.
     pub all_components: bool,
     /// Fill the kept pieces' enclosed voids (default: each void is an
-    /// inner shell of the surface, facing into it).
+    /// inner shell of the surface, facing into it, unless finer than the
+    /// scan resolves: `pieces::LEAST_VOID`).
     pub fill_voids: bool,
     /// Decimate to at most this many faces (quadric error collapses that
     /// keep the surface manifold, then tangential relaxation).
@@ -259,6 +260,10 @@ pub struct MeshReport {
     /// surface unless filled), and whether they were filled.
     pub voids: usize,
     pub voids_filled: bool,
+    /// Of the voids, those whose shell, smoothed, enclosed under
+    /// `pieces::LEAST_VOID` voxel, finer than the scan resolves: filled
+    /// (counted in `voxels`).
+    pub voids_unresolved: usize,
     pub vertices: usize,
     pub faces: usize,
     /// The enclosed volume of what was kept, mm^3.
@@ -307,15 +312,13 @@ pub fn mesh(
         found.of_voxel.iter().map(|&p| p == largest).collect()
     };
     drop(found);
-    let (void, voids) = pieces::voids(volume.size, &kept, progress)?;
+    let (void_of, voids) = pieces::numbered_voids(volume.size, &kept, progress)?;
     if opts.fill_voids {
-        for (k, v) in kept.iter_mut().zip(&void) {
-            *k |= *v;
+        for (k, v) in kept.iter_mut().zip(&void_of) {
+            *k |= *v != pieces::NONE;
         }
     }
-    drop(void);
     progress.advance(1);
-    let voxels = kept.iter().filter(|&&b| b).count() as u64;
     // One step per slab of cubes, the padding's included.
     progress.stage("extracting the surface", volume.size[2] as u64 + 1);
     // A grey volume keeps its values where the kept voxels are the ones
@@ -347,6 +350,8 @@ pub fn mesh(
         }
     };
     let mut mesh = surface::march(volume.size, field, progress)?;
+    // Where the voids' shells were marched, which says whose they are.
+    let marched = (voids > 0 && !opts.fill_voids).then(|| mesh.positions.clone());
     let kept_pieces = if opts.all_components { components } else { 1 };
     // Smoothing in voxel units (the grid's own isotropy), then to world.
     match opts.smoother {
@@ -355,6 +360,19 @@ pub fn mesh(
             smooth::windowed_sinc(&mut mesh, opts.smooth, smooth::PASS_BAND, progress)?
         }
     }
+    // The voids finer than the scan resolves are filled (`pieces::LEAST_VOID`).
+    let voids_unresolved = match &marched {
+        Some(marched) => pieces::fill_unresolved(
+            &mut mesh,
+            marched,
+            &mut kept,
+            (&void_of, voids),
+            volume.size,
+        ),
+        None => 0,
+    };
+    drop((marched, void_of));
+    let voxels = kept.iter().filter(|&&b| b).count() as u64;
     for p in &mut mesh.positions {
         *p = volume.to_world.transform_point3(*p);
     }
@@ -425,6 +443,7 @@ pub fn mesh(
         components_kept: kept_pieces,
         voids,
         voids_filled: opts.fill_voids && voids > 0,
+        voids_unresolved,
         vertices: mesh.num_vertices(),
         faces: mesh.num_faces(),
         volume: mesh.signed_volume(),

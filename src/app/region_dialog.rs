@@ -127,7 +127,10 @@ impl RegionDialog {
                 ui.checkbox(&mut self.all_components, "keep every piece")
                     .on_hover_text("default: the largest piece, by voxels");
                 ui.checkbox(&mut self.fill_voids, "fill enclosed voids")
-                    .on_hover_text("default: each void is an inner shell of the surface");
+                    .on_hover_text(
+                        "default: each void is an inner shell of the surface, but for those \
+                         finer than a voxel",
+                    );
                 ui.checkbox(&mut self.within_voxels, "keep thin crests")
                     .on_hover_text(
                         "hold every voxel corner within 0.9 voxel through the decimation: \

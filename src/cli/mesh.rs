@@ -256,8 +256,8 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The genus of each closed sheet, the first few listed (voids add a
-/// sheet each; `--json` lists them all).
+/// The genus of each closed sheet, the first few listed (voids kept add
+/// a sheet each; `--json` lists them all).
 fn genus_list(genus: &[i64]) -> String {
     const SHOWN: usize = 6;
     let shown: Vec<String> = genus.iter().take(SHOWN).map(|g| g.to_string()).collect();

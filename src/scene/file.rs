@@ -120,7 +120,7 @@ fn default_segmentation_faces() -> usize {
 
 impl Segmentation {
     /// The region `choice` of `file`, with a scene's defaults (20 Taubin
-    /// iterations, 20,000 faces, the largest piece, voids kept).
+    /// iterations, 20,000 faces, the largest piece, voids kept, not specks).
     pub fn of(file: PathBuf, choice: &crate::segment::Choice) -> Segmentation {
         use crate::segment::Choice;
         Segmentation {

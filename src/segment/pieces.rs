@@ -199,23 +199,28 @@ pub fn numbered_voids(
 
 /// The least a void's inner shell may enclose once smoothed, voxels, for
 /// the void to stay a void: a sixteenth. A label map's smallest void, one
-/// voxel, is marched as a shell of half a voxel (it crosses the edges from
-/// the voxel's centre half way); a probability map's voxel just under the
-/// level as next to nothing (it crosses them a hair from the centre: half
-/// the MNI grey matter's 231 voids at 0.5 enclose under 0.04 voxel). And
-/// the smoothing, whose pass band is the staircase's, shrinks a void of a
-/// voxel or two further (the default smoothing leaves 173 of those 231
-/// under a sixteenth), which the decimation then makes a speck of four
-/// faces whose curvature outweighs the whole surface's. A sixteenth of a
-/// voxel is a single voxel's shell crossing its edges a quarter of the
-/// way: under half a voxel across, finer than the scan resolves.
+/// voxel, is marched as an octahedron of a sixth of a voxel (crossing the
+/// six edges from the voxel's centre half way); a probability map's
+/// voxel just under the level as next to nothing (crossing them a hair
+/// from the centre: half the MNI grey matter's 231 voids at 0.5 enclose
+/// under 0.04 voxel). And a shell all of whose bends are the staircase's
+/// is what the smoothing takes away: Taubin's default shrinks that
+/// octahedron to 5e-5 voxel and a void of 2 x 2 x 2 voxels from 5.7 to
+/// 3.3 (the windowed sinc to 0.012), and the decimation makes such a
+/// speck four faces whose curvature outweighs the whole surface's (173
+/// of the grey matter's 231 under a sixteenth smoothed). A sixteenth of a
+/// voxel is under half a voxel across, finer than the scan resolves.
 pub const LEAST_VOID: f64 = 1.0 / 16.0;
 
 /// Fills the voids whose inner shells in `mesh` (in voxel coordinates,
-/// smoothed; `marched`: its vertices where they were marched, on the
-/// grid's edges) enclose under `LEAST_VOID`: their shells leave the mesh
-/// and their voxels (`void_of`, of `voids` numbered as `numbered_voids`
-/// gives them) join `kept`. The number filled.
+/// smoothed) enclose under `LEAST_VOID`: their shells leave the mesh and
+/// their voxels (`void_of`, of `voids` numbered as `numbered_voids` gives
+/// them) join `kept`. Whose a shell is comes from `marched`, its vertices
+/// where they were marched: an inner shell faces into its void there (a
+/// windowed sinc can mirror a shell it shrinks to a speck), and a vertex
+/// on a grid edge lies between a voxel of the void and one of the
+/// tissue. The number filled. (A piece of tissue inside a filled void,
+/// kept by `--all-components`, keeps its own shell.)
 pub fn fill_unresolved(
     mesh: &mut TriMesh,
     marched: &[DVec3],
@@ -229,39 +234,48 @@ pub fn fill_unresolved(
         sets.union(t[0] as usize, t[2] as usize);
     }
     let (shell_of, shells) = sets.labels();
-    // Each shell's enclosed volume, about one of its own vertices (a
-    // speck far from the origin would lose its volume to rounding).
+    // Each shell's enclosed volume as marched and as smoothed, about one
+    // of its own vertices (a speck far from the origin would lose its
+    // volume to rounding).
     let mut origin = vec![None; shells];
-    let mut enclosed = vec![0.0; shells];
-    for (f, t) in mesh.triangles.iter().enumerate() {
+    let (mut as_marched, mut enclosed) = (vec![0.0; shells], vec![0.0; shells]);
+    for t in &mesh.triangles {
         let shell = shell_of[t[0] as usize] as usize;
-        let o = *origin[shell].get_or_insert(mesh.positions[t[0] as usize]);
-        let [a, b, c] = mesh.corners(f).map(|p| p - o);
-        enclosed[shell] += a.dot(b.cross(c)) / 6.0;
+        let o = *origin[shell].get_or_insert(t[0] as usize);
+        for (positions, volume) in [
+            (marched, &mut as_marched),
+            (&mesh.positions[..], &mut enclosed),
+        ] {
+            let [a, b, c] = t.map(|v| positions[v as usize] - positions[o]);
+            volume[shell] += a.dot(b.cross(c)) / 6.0;
+        }
     }
-    // An inner shell faces into its void (encloses a negative volume);
-    // its vertices were marched on grid edges from the void's voxels, so
-    // the void voxel nearest one among its grid cell's corners is the
-    // void's.
     let [nx, ny, nz] = size.map(|n| n as i64);
+    let void_at = |c: glam::I64Vec3| -> u32 {
+        let within = (0..nx).contains(&c.x) && (0..ny).contains(&c.y) && (0..nz).contains(&c.z);
+        match within {
+            true => void_of[((c.z * ny + c.y) * nx + c.x) as usize],
+            false => NONE,
+        }
+    };
     let mut fill = vec![false; voids];
     let mut dropped = vec![false; shells];
     for (v, p) in marched.iter().enumerate() {
         let shell = shell_of[v] as usize;
-        if dropped[shell] || !(enclosed[shell] < 0.0 && -enclosed[shell] < LEAST_VOID) {
+        if dropped[shell] || !(as_marched[shell] < 0.0 && enclosed[shell].abs() < LEAST_VOID) {
             continue;
         }
-        let cell = p.floor().as_i64vec3();
-        let void = (0..8)
-            .map(|k| cell + glam::I64Vec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1))
-            .filter(|c| (0..nx).contains(&c.x) && (0..ny).contains(&c.y) && (0..nz).contains(&c.z))
-            .map(|c| (c, void_of[((c.z * ny + c.y) * nx + c.x) as usize]))
-            .filter(|&(_, void)| void != NONE)
-            .min_by(|a, b| {
-                p.distance_squared(a.0.as_dvec3())
-                    .total_cmp(&p.distance_squared(b.0.as_dvec3()))
-            });
-        if let Some((_, void)) = void {
+        // A grid edge's vertex has two whole coordinates (a cube's centre
+        // none); the edge's ends are the third's floor and ceiling.
+        let whole: Vec<usize> = (0..3).filter(|&k| p[k].fract() == 0.0).collect();
+        if whole.len() != 2 {
+            continue;
+        }
+        let along = 3 - whole[0] - whole[1];
+        let low = p.floor().as_i64vec3();
+        let mut high = low;
+        high[along] += 1;
+        if let Some(void) = [low, high].map(void_at).into_iter().find(|&q| q != NONE) {
             fill[void as usize] = true;
             dropped[shell] = true;
         }

@@ -201,9 +201,9 @@ impl State {
     /// and not both ends of three neighbours, where the edge is one of a
     /// tetrahedron's, a closed piece of four faces that the link condition
     /// would let fold into a doubled triangle) and no face it moves flips
-    /// or turns far; if so, the worst
-    /// sharpness (`sharpness`) among the faces round the edge before and
-    /// among those it moves after, for the caller's shape rule.
+    /// or turns far; if so, the worst sharpness (`sharpness`) among the
+    /// faces round the edge before and among those it moves after, for
+    /// the caller's shape rule.
     fn shapes(
         &self,
         a: u32,

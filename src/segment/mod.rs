@@ -350,8 +350,9 @@ pub fn mesh(
         }
     };
     let mut mesh = surface::march(volume.size, field, progress)?;
-    // Where the voids' shells were marched, which says whose they are.
-    let marched = (voids > 0 && !opts.fill_voids).then(|| mesh.positions.clone());
+    // Whose each shell is, told as marched (`pieces::void_shells`).
+    let shells =
+        (voids > 0 && !opts.fill_voids).then(|| pieces::void_shells(&mesh, &void_of, volume.size));
     let kept_pieces = if opts.all_components { components } else { 1 };
     // Smoothing in voxel units (the grid's own isotropy), then to world.
     match opts.smoother {
@@ -361,17 +362,10 @@ pub fn mesh(
         }
     }
     // The voids finer than the scan resolves are filled (`pieces::LEAST_VOID`).
-    let voids_unresolved = match &marched {
-        Some(marched) => pieces::fill_unresolved(
-            &mut mesh,
-            marched,
-            &mut kept,
-            (&void_of, voids),
-            volume.size,
-        ),
-        None => 0,
-    };
-    drop((marched, void_of));
+    let voids_unresolved = shells.map_or(0, |shells| {
+        pieces::fill_unresolved(&mut mesh, &shells, &mut kept, (&void_of, voids))
+    });
+    drop(void_of);
     let voxels = kept.iter().filter(|&&b| b).count() as u64;
     for p in &mut mesh.positions {
         *p = volume.to_world.transform_point3(*p);

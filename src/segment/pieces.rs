@@ -20,7 +20,6 @@ use crate::mesh::dsu::DisjointSets;
 use crate::mesh::submesh::extract;
 use crate::mesh::{FaceId, TriMesh};
 use crate::progress::{self, Progress};
-use glam::DVec3;
 
 /// The 14 neighbours of the Kuhn split (see the module's comment).
 pub(super) const NEIGHBOURS: [[i64; 3]; 14] = [
@@ -212,44 +211,32 @@ pub fn numbered_voids(
 /// voxel is under half a voxel across, finer than the scan resolves.
 pub const LEAST_VOID: f64 = 1.0 / 16.0;
 
-/// Fills the voids whose inner shells in `mesh` (in voxel coordinates,
-/// smoothed) enclose under `LEAST_VOID`: their shells leave the mesh and
-/// their voxels (`void_of`, of `voids` numbered as `numbered_voids` gives
-/// them) join `kept`. Whose a shell is comes from `marched`, its vertices
-/// where they were marched: an inner shell faces into its void there (a
-/// windowed sinc can mirror a shell it shrinks to a speck), and a vertex
-/// on a grid edge lies between a voxel of the void and one of the
-/// tissue. The number filled. (A piece of tissue inside a filled void,
-/// kept by `--all-components`, keeps its own shell.)
-pub fn fill_unresolved(
-    mesh: &mut TriMesh,
-    marched: &[DVec3],
-    kept: &mut [bool],
-    (void_of, voids): (&[u32], usize),
-    size: [usize; 3],
-) -> usize {
+/// The closed shells of a surface `segment::mesh` marched, told apart
+/// before the smoothing moves them: each vertex's shell, and the void
+/// each inner shell faces into.
+pub struct VoidShells {
+    shell_of: Vec<u32>,
+    void: Vec<Option<u32>>,
+}
+
+/// The shells of `mesh` as marched (voxel coordinates) and their voids
+/// (`void_of`, as `numbered_voids` gives them). An inner shell faces into
+/// its void there (a windowed sinc can mirror a shell it shrinks to a
+/// speck, so the smoothed sign would not tell), and a vertex on a grid
+/// edge (two whole coordinates; a cube centre's has none) lies between a
+/// voxel of the void and one of the tissue, the edge's ends the third
+/// coordinate's floor and ceiling.
+pub fn void_shells(mesh: &TriMesh, void_of: &[u32], size: [usize; 3]) -> VoidShells {
     let mut sets = DisjointSets::new(mesh.num_vertices());
     for t in &mesh.triangles {
         sets.union(t[0] as usize, t[1] as usize);
         sets.union(t[0] as usize, t[2] as usize);
     }
     let (shell_of, shells) = sets.labels();
-    // Each shell's enclosed volume as marched and as smoothed, about one
-    // of its own vertices (a speck far from the origin would lose its
-    // volume to rounding).
-    let mut origin = vec![None; shells];
-    let (mut as_marched, mut enclosed) = (vec![0.0; shells], vec![0.0; shells]);
-    for t in &mesh.triangles {
-        let shell = shell_of[t[0] as usize] as usize;
-        let o = *origin[shell].get_or_insert(t[0] as usize);
-        for (positions, volume) in [
-            (marched, &mut as_marched),
-            (&mesh.positions[..], &mut enclosed),
-        ] {
-            let [a, b, c] = t.map(|v| positions[v as usize] - positions[o]);
-            volume[shell] += a.dot(b.cross(c)) / 6.0;
-        }
-    }
+    let inner: Vec<bool> = shell_volumes(mesh, &shell_of, shells)
+        .iter()
+        .map(|&v| v < 0.0)
+        .collect();
     let [nx, ny, nz] = size.map(|n| n as i64);
     let void_at = |c: glam::I64Vec3| -> u32 {
         let within = (0..nx).contains(&c.x) && (0..ny).contains(&c.y) && (0..nz).contains(&c.z);
@@ -258,35 +245,70 @@ pub fn fill_unresolved(
             false => NONE,
         }
     };
-    let mut fill = vec![false; voids];
-    let mut dropped = vec![false; shells];
-    for (v, p) in marched.iter().enumerate() {
+    let mut void = vec![None; shells];
+    for (v, p) in mesh.positions.iter().enumerate() {
         let shell = shell_of[v] as usize;
-        if dropped[shell] || !(as_marched[shell] < 0.0 && enclosed[shell].abs() < LEAST_VOID) {
+        if !inner[shell] || void[shell].is_some() {
             continue;
         }
-        // A grid edge's vertex has two whole coordinates (a cube's centre
-        // none); the edge's ends are the third's floor and ceiling.
-        let whole: Vec<usize> = (0..3).filter(|&k| p[k].fract() == 0.0).collect();
-        if whole.len() != 2 {
+        let mut whole = (0..3).filter(|&k| p[k].fract() == 0.0);
+        let (Some(a), Some(b), None) = (whole.next(), whole.next(), whole.next()) else {
             continue;
-        }
-        let along = 3 - whole[0] - whole[1];
+        };
         let low = p.floor().as_i64vec3();
         let mut high = low;
-        high[along] += 1;
-        if let Some(void) = [low, high].map(void_at).into_iter().find(|&q| q != NONE) {
-            fill[void as usize] = true;
-            dropped[shell] = true;
-        }
+        high[3 - a - b] += 1;
+        void[shell] = [low, high].map(void_at).into_iter().find(|&q| q != NONE);
     }
+    VoidShells { shell_of, void }
+}
+
+/// Each shell's enclosed volume, about one of its own vertices (a speck
+/// far from the origin would lose its volume to rounding).
+fn shell_volumes(mesh: &TriMesh, shell_of: &[u32], shells: usize) -> Vec<f64> {
+    let mut origin = vec![None; shells];
+    let mut enclosed = vec![0.0; shells];
+    for t in &mesh.triangles {
+        let shell = shell_of[t[0] as usize] as usize;
+        let o = *origin[shell].get_or_insert(mesh.positions[t[0] as usize]);
+        let [a, b, c] = t.map(|v| mesh.positions[v as usize] - o);
+        enclosed[shell] += a.dot(b.cross(c)) / 6.0;
+    }
+    enclosed
+}
+
+/// Fills the voids whose inner shells (`shells`, told apart as marched)
+/// enclose under `LEAST_VOID` in `mesh` as smoothed (voxel coordinates):
+/// their shells leave the mesh and their voxels (`void_of`, of `voids`)
+/// join `kept`. The number filled. (A piece of tissue inside a filled
+/// void, kept by `--all-components`, keeps its own shell.)
+pub fn fill_unresolved(
+    mesh: &mut TriMesh,
+    shells: &VoidShells,
+    kept: &mut [bool],
+    (void_of, voids): (&[u32], usize),
+) -> usize {
+    let enclosed = shell_volumes(mesh, &shells.shell_of, shells.void.len());
+    let mut fill = vec![false; voids];
+    let dropped: Vec<bool> = shells
+        .void
+        .iter()
+        .zip(&enclosed)
+        .map(|(void, volume)| match void {
+            Some(void) if volume.abs() < LEAST_VOID => {
+                fill[*void as usize] = true;
+                true
+            }
+            _ => false,
+        })
+        .collect();
     for (k, &v) in kept.iter_mut().zip(void_of) {
         if v != NONE && fill[v as usize] {
             *k = true;
         }
     }
     let faces: Vec<FaceId> = (0..mesh.num_faces())
-        .filter(|&f| !dropped[shell_of[mesh.triangles[f][0] as usize] as usize])
+        .filter(|&f| !dropped[shells.shell_of[mesh.triangles[f][0] as usize] as usize])
         .map(FaceId::from)
         .collect();
     if faces.len() < mesh.num_faces() {

@@ -930,9 +930,8 @@ mod tests {
         let volume: f64 = piece
             .iter()
             .map(|&f| {
-                let [a, b, c] = out.corners(f);
-                (a - DVec3::new(3.0, 0.0, 0.0))
-                    .dot((b - DVec3::new(3.0, 0.0, 0.0)).cross(c - DVec3::new(3.0, 0.0, 0.0)))
+                let [a, b, c] = out.corners(f).map(|p| p - DVec3::new(3.0, 0.0, 0.0));
+                a.dot(b.cross(c))
             })
             .sum::<f64>()
             / 6.0;

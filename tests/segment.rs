@@ -375,6 +375,108 @@ fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
     assert_eq!(check_surface(&mesh, "ball with voids filled"), vec![0]);
 }
 
+/// The pieces `--all-components` keeps are held to the same resolution as
+/// the voids: a probability map's voxel a hair over the level, and a lone
+/// voxel (its octahedron, a sixth of a voxel, smoothed to a speck), are
+/// dropped, not left as four faces enclosing nothing with a mean
+/// curvature in the thousands (the MNI white matter kept whole has 49
+/// pieces besides the largest: a spread of 42 against 0.31); a block of
+/// eight voxels stays, a closed shell enclosing a volume.
+#[test]
+fn islands_finer_than_a_voxel_are_dropped_from_every_piece_kept() {
+    let n = 32;
+    let centre = DVec3::splat(15.5);
+    let mut values = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let r = (DVec3::new(x as f64, y as f64, z as f64) - centre).length();
+                values.push((128.0 + 40.0 * (12.0 - r)).clamp(0.0, 255.0) as f32);
+            }
+        }
+    }
+    let at = |x: usize, y: usize, z: usize| (z * n + y) * n + x;
+    // In the corners, far from the ball and from each other: three voxels
+    // a hair over the level, one far over it, a block of 2 x 2 x 2.
+    for [x, y, z] in [[2, 2, 2], [29, 2, 2], [2, 29, 2]] {
+        values[at(x, y, z)] = 127.6;
+    }
+    values[at(29, 29, 2)] = 255.0;
+    for d in 0..8 {
+        values[at(2 + (d & 1), 2 + (d >> 1 & 1), 27 + (d >> 2))] = 255.0;
+    }
+    let level = 127.5;
+    let inside = values.iter().filter(|&&v| v >= level).count() as u64;
+    let volume = ScalarVolume {
+        size: [n; 3],
+        values,
+        to_world: DAffine3::from_scale(DVec3::splat(0.5)),
+    };
+    let opts = MeshOptions {
+        region: Region::Threshold(level as f64),
+        smooth: segment::DEFAULT_SMOOTH,
+        smoother: Default::default(),
+        all_components: true,
+        fill_voids: false,
+        faces: Some(600),
+        max_handle: None,
+        within_voxels: None,
+    };
+    let mesh_of = |opts: &MeshOptions| {
+        let (mesh, report) =
+            segment::mesh(&volume, Path::new("islands.nii"), opts, &Silent).unwrap();
+        // Every shell left encloses a sixteenth of a voxel or more (1/128
+        // mm^3 here), with four faces at least.
+        let shells = shells(&mesh);
+        for &(faces, enclosed) in &shells {
+            assert!(
+                faces >= 4 && enclosed >= 1.0 / 128.0,
+                "a shell of {faces} faces enclosing {enclosed}: {report:?}"
+            );
+        }
+        assert_eq!(shells.len(), report.components_kept, "{report:?}");
+        (mesh, report)
+    };
+    let (mesh, report) = mesh_of(&opts);
+    let counts = (
+        report.components,
+        report.components_kept,
+        report.islands_unresolved,
+    );
+    assert_eq!(counts, (6, 2, 4), "{report:?}");
+    assert_eq!(report.voxels, inside - 4, "{report:?}");
+    assert_eq!(check_surface(&mesh, "ball and islands"), vec![0, 0]);
+    assert!(
+        report.min_angle >= organtex::mesh::decimate::MIN_ANGLE,
+        "{report:?}"
+    );
+    // Unsmoothed, the lone voxel's octahedron stays; the three a hair
+    // over the level are still specks.
+    let raw = MeshOptions {
+        smooth: 0,
+        faces: None,
+        ..opts.clone()
+    };
+    let (_, report) = mesh_of(&raw);
+    assert_eq!(
+        (report.components_kept, report.islands_unresolved),
+        (3, 3),
+        "{report:?}"
+    );
+    // The largest piece alone: nothing to drop.
+    let largest = MeshOptions {
+        all_components: false,
+        ..opts
+    };
+    let (_, report) = mesh_of(&largest);
+    let counts = (
+        report.components,
+        report.components_kept,
+        report.islands_unresolved,
+    );
+    assert_eq!(counts, (6, 1, 0), "{report:?}");
+}
+
 #[test]
 fn the_mni_white_matter_is_closed_manifold_and_keeps_its_volume() {
     let path = volumes("mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz");

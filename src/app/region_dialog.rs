@@ -125,7 +125,10 @@ impl RegionDialog {
                     .on_hover_text("quadric-error decimation to this many faces");
                 });
                 ui.checkbox(&mut self.all_components, "keep every piece")
-                    .on_hover_text("default: the largest piece, by voxels");
+                    .on_hover_text(
+                        "default: the largest piece, by voxels; kept, a piece finer than a \
+                         voxel is dropped all the same",
+                    );
                 ui.checkbox(&mut self.fill_voids, "fill enclosed voids")
                     .on_hover_text(
                         "default: each void is an inner shell of the surface, but for those \

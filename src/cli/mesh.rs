@@ -39,7 +39,10 @@ pub struct Args {
     #[arg(long, default_value_t = segment::DEFAULT_SMOOTH as u32, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     smooth: u32,
     /// Keep every piece of the region (default: the largest, by voxels,
-    /// with its enclosed voids).
+    /// with its enclosed voids); only a piece whose shell, smoothed,
+    /// encloses under a sixteenth of a voxel (a probability map's voxel a
+    /// hair over the threshold, a lone voxel of a label), finer than the
+    /// scan resolves, is dropped.
     #[arg(long)]
     all_components: bool,
     /// Fill the enclosed voids of the kept pieces (a ventricle inside the
@@ -196,6 +199,12 @@ pub fn run(args: Args) -> Result<()> {
             } else {
                 "kept as inner shells (--fill-voids fills them)".to_string()
             }
+        );
+    }
+    if f.report.islands_unresolved > 0 {
+        println!(
+            "  dropped {} of the {} pieces: their shells enclosed under a sixteenth of a voxel smoothed, finer than the scan resolves",
+            f.report.islands_unresolved, f.report.components
         );
     }
     if let Some(h) = &f.report.handles {

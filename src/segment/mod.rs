@@ -177,7 +177,8 @@ pub struct MeshOptions {
     /// marching-cubes surface.
     pub smooth: usize,
     pub smoother: Smoother,
-    /// Keep every connected piece, not only the largest.
+    /// Keep every connected piece, not only the largest (but those finer
+    /// than the scan resolves: `pieces::LEAST_VOID`).
     pub all_components: bool,
     /// Fill the kept pieces' enclosed voids (default: each void is an
     /// inner shell of the surface, facing into it, unless finer than the
@@ -264,6 +265,10 @@ pub struct MeshReport {
     /// `pieces::LEAST_VOID` voxel, finer than the scan resolves: filled
     /// (counted in `voxels`).
     pub voids_unresolved: usize,
+    /// Of the pieces `all_components` keeps, those whose shell, smoothed,
+    /// enclosed under `pieces::LEAST_VOID` voxel: dropped (not counted in
+    /// `components_kept` nor in `voxels`).
+    pub islands_unresolved: usize,
     pub vertices: usize,
     pub faces: usize,
     /// The enclosed volume of what was kept, mm^3.
@@ -305,11 +310,20 @@ pub fn mesh(
     let found = pieces::pieces(volume.size, inside, progress)?;
     let components = found.count();
     // The largest piece by voxels, with its voids (see `pieces`).
+    let largest = found.largest().expect("select refuses an empty region");
     let mut kept: Vec<bool> = if opts.all_components {
         inside.to_vec()
     } else {
-        let largest = found.largest().expect("select refuses an empty region");
         found.of_voxel.iter().map(|&p| p == largest).collect()
+    };
+    // The other pieces kept, as islands: their voxels, each with its
+    // piece, in voxel order (`pieces::shells`).
+    let islands: Vec<(usize, u32)> = match opts.all_components {
+        true => (found.of_voxel.iter().enumerate())
+            .filter(|&(_, &p)| p != pieces::NONE && p != largest)
+            .map(|(i, &p)| (i, p))
+            .collect(),
+        false => Vec::new(),
     };
     drop(found);
     let (void_of, voids) = pieces::numbered_voids(volume.size, &kept, progress)?;
@@ -350,10 +364,9 @@ pub fn mesh(
         }
     };
     let mut mesh = surface::march(volume.size, field, progress)?;
-    // Whose each shell is, told as marched (`pieces::void_shells`).
-    let shells =
-        (voids > 0 && !opts.fill_voids).then(|| pieces::void_shells(&mesh, &void_of, volume.size));
-    let kept_pieces = if opts.all_components { components } else { 1 };
+    // Whose each shell is, told as marched (`pieces::shells`).
+    let shells = (voids > 0 && !opts.fill_voids || !islands.is_empty())
+        .then(|| pieces::shells(&mesh, &void_of, &islands, volume.size));
     // Smoothing in voxel units (the grid's own isotropy), then to world.
     match opts.smoother {
         Smoother::Taubin => smooth::taubin(&mut mesh, opts.smooth, progress)?,
@@ -361,11 +374,16 @@ pub fn mesh(
             smooth::windowed_sinc(&mut mesh, opts.smooth, smooth::PASS_BAND, progress)?
         }
     }
-    // The voids finer than the scan resolves are filled (`pieces::LEAST_VOID`).
-    let voids_unresolved = shells.map_or(0, |shells| {
-        pieces::fill_unresolved(&mut mesh, &shells, &mut kept, (&void_of, voids))
+    // The voids finer than the scan resolves are filled, the islands
+    // dropped (`pieces::LEAST_VOID`).
+    let unresolved = shells.map_or(pieces::Unresolved::default(), |shells| {
+        pieces::drop_unresolved(&mut mesh, &shells, &mut kept, (&void_of, voids), &islands)
     });
-    drop(void_of);
+    drop((void_of, islands));
+    let kept_pieces = match opts.all_components {
+        true => components - unresolved.islands,
+        false => 1,
+    };
     let voxels = kept.iter().filter(|&&b| b).count() as u64;
     for p in &mut mesh.positions {
         *p = volume.to_world.transform_point3(*p);
@@ -437,7 +455,8 @@ pub fn mesh(
         components_kept: kept_pieces,
         voids,
         voids_filled: opts.fill_voids && voids > 0,
-        voids_unresolved,
+        voids_unresolved: unresolved.voids,
+        islands_unresolved: unresolved.islands,
         vertices: mesh.num_vertices(),
         faces: mesh.num_faces(),
         volume: mesh.signed_volume(),

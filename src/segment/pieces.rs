@@ -212,21 +212,29 @@ pub fn numbered_voids(
 pub const LEAST_VOID: f64 = 1.0 / 16.0;
 
 /// The closed shells of a surface `segment::mesh` marched, told apart
-/// before the smoothing moves them: each vertex's shell, and the void
-/// each inner shell faces into.
-pub struct VoidShells {
+/// before the smoothing moves them: each vertex's shell, the void each
+/// inner shell faces into, and the island (a piece other than the largest,
+/// kept by `--all-components`) each outer shell is round.
+pub struct Shells {
     shell_of: Vec<u32>,
     void: Vec<Option<u32>>,
+    island: Vec<Option<u32>>,
 }
 
-/// The shells of `mesh` as marched (voxel coordinates) and their voids
-/// (`void_of`, as `numbered_voids` gives them). An inner shell faces into
-/// its void there (a windowed sinc can mirror a shell it shrinks to a
-/// speck, so the smoothed sign would not tell), and a vertex on a grid
-/// edge (two whole coordinates; a cube centre's has none) lies between a
-/// voxel of the void and one of the tissue, the edge's ends the third
-/// coordinate's floor and ceiling.
-pub fn void_shells(mesh: &TriMesh, void_of: &[u32], size: [usize; 3]) -> VoidShells {
+/// The shells of `mesh` as marched (voxel coordinates), their voids
+/// (`void_of`, as `numbered_voids` gives them) and islands (`islands`:
+/// the voxels of the pieces but the largest, each with its piece, in
+/// voxel order). An inner shell faces into its void there (a windowed
+/// sinc can mirror a shell it shrinks to a speck, so the smoothed sign
+/// would not tell), and a vertex on a grid edge (two whole coordinates; a
+/// cube centre's has none) lies between a voxel outside and one inside,
+/// the edge's ends the third coordinate's floor and ceiling.
+pub fn shells(
+    mesh: &TriMesh,
+    void_of: &[u32],
+    islands: &[(usize, u32)],
+    size: [usize; 3],
+) -> Shells {
     let mut sets = DisjointSets::new(mesh.num_vertices());
     for t in &mesh.triangles {
         sets.union(t[0] as usize, t[1] as usize);
@@ -238,17 +246,20 @@ pub fn void_shells(mesh: &TriMesh, void_of: &[u32], size: [usize; 3]) -> VoidShe
         .map(|&v| v < 0.0)
         .collect();
     let [nx, ny, nz] = size.map(|n| n as i64);
-    let void_at = |c: glam::I64Vec3| -> u32 {
+    let voxel = |c: glam::I64Vec3| -> Option<usize> {
         let within = (0..nx).contains(&c.x) && (0..ny).contains(&c.y) && (0..nz).contains(&c.z);
-        match within {
-            true => void_of[((c.z * ny + c.y) * nx + c.x) as usize],
-            false => NONE,
-        }
+        within.then_some(((c.z * ny + c.y) * nx + c.x) as usize)
     };
-    let mut void = vec![None; shells];
+    let void_at = |i: usize| Some(void_of[i]).filter(|&q| q != NONE);
+    let island_at = |i: usize| {
+        let found = islands.binary_search_by_key(&i, |&(voxel, _)| voxel);
+        found.ok().map(|k| islands[k].1)
+    };
+    let (mut void, mut island) = (vec![None; shells], vec![None; shells]);
+    let mut told = vec![false; shells];
     for (v, p) in mesh.positions.iter().enumerate() {
         let shell = shell_of[v] as usize;
-        if !inner[shell] || void[shell].is_some() {
+        if told[shell] {
             continue;
         }
         let mut whole = (0..3).filter(|&k| p[k].fract() == 0.0);
@@ -258,9 +269,20 @@ pub fn void_shells(mesh: &TriMesh, void_of: &[u32], size: [usize; 3]) -> VoidShe
         let low = p.floor().as_i64vec3();
         let mut high = low;
         high[3 - a - b] += 1;
-        void[shell] = [low, high].map(void_at).into_iter().find(|&q| q != NONE);
+        // One end is inside, the other outside: the shell's void, or its
+        // island (none: the largest piece).
+        let mut ends = [low, high].map(voxel).into_iter().flatten();
+        match inner[shell] {
+            true => void[shell] = ends.find_map(void_at),
+            false => island[shell] = ends.find_map(island_at),
+        }
+        told[shell] = true;
     }
-    VoidShells { shell_of, void }
+    Shells {
+        shell_of,
+        void,
+        island,
+    }
 }
 
 /// Each shell's enclosed volume, about one of its own vertices (a speck
@@ -277,34 +299,55 @@ fn shell_volumes(mesh: &TriMesh, shell_of: &[u32], shells: usize) -> Vec<f64> {
     enclosed
 }
 
+/// What `drop_unresolved` did: the voids it filled, and the islands
+/// (pieces) it dropped.
+#[derive(Default)]
+pub struct Unresolved {
+    pub voids: usize,
+    pub islands: usize,
+}
+
 /// Fills the voids whose inner shells (`shells`, told apart as marched)
-/// enclose under `LEAST_VOID` in `mesh` as smoothed (voxel coordinates):
-/// their shells leave the mesh and their voxels (`void_of`, of `voids`)
-/// join `kept`. The number filled. (A piece of tissue inside a filled
-/// void, kept by `--all-components`, keeps its own shell.)
-pub fn fill_unresolved(
+/// enclose under `LEAST_VOID` in `mesh` as smoothed (voxel coordinates),
+/// and drops the islands whose outer shells do (finer than the scan
+/// resolves, the same way: a probability map's voxel a hair over the
+/// level, which Taubin shrinks to next to nothing; the MNI white matter
+/// at 0.5 kept whole has 49 pieces, whose smallest the decimation left as
+/// four faces of no volume, a mean curvature up to 1,600 per mm). Their
+/// shells leave the mesh; the voids' voxels (`void_of`, of `voids`) join
+/// `kept`, the islands' (`islands`, as `shells` took them) leave it. (A
+/// piece of tissue inside a filled void keeps its own shell.)
+pub fn drop_unresolved(
     mesh: &mut TriMesh,
-    shells: &VoidShells,
+    shells: &Shells,
     kept: &mut [bool],
     (void_of, voids): (&[u32], usize),
-) -> usize {
+    islands: &[(usize, u32)],
+) -> Unresolved {
     let enclosed = shell_volumes(mesh, &shells.shell_of, shells.void.len());
     let mut fill = vec![false; voids];
-    let dropped: Vec<bool> = shells
-        .void
-        .iter()
-        .zip(&enclosed)
-        .map(|(void, volume)| match void {
-            Some(void) if volume.abs() < LEAST_VOID => {
-                fill[*void as usize] = true;
-                true
+    let mut gone = std::collections::BTreeSet::new();
+    let dropped: Vec<bool> = (0..enclosed.len())
+        .map(|shell| {
+            if enclosed[shell].abs() >= LEAST_VOID {
+                return false;
             }
-            _ => false,
+            match (shells.void[shell], shells.island[shell]) {
+                (Some(void), _) => fill[void as usize] = true,
+                (_, Some(island)) => _ = gone.insert(island),
+                _ => return false,
+            }
+            true
         })
         .collect();
     for (k, &v) in kept.iter_mut().zip(void_of) {
         if v != NONE && fill[v as usize] {
             *k = true;
+        }
+    }
+    for &(voxel, island) in islands {
+        if gone.contains(&island) {
+            kept[voxel] = false;
         }
     }
     let faces: Vec<FaceId> = (0..mesh.num_faces())
@@ -314,7 +357,10 @@ pub fn fill_unresolved(
     if faces.len() < mesh.num_faces() {
         *mesh = extract(mesh, &faces).0;
     }
-    fill.iter().filter(|&&f| f).count()
+    Unresolved {
+        voids: fill.iter().filter(|&&f| f).count(),
+        islands: gone.len(),
+    }
 }
 
 #[cfg(test)]

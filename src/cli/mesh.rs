@@ -39,10 +39,10 @@ pub struct Args {
     #[arg(long, default_value_t = segment::DEFAULT_SMOOTH as u32, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     smooth: u32,
     /// Keep every piece of the region (default: the largest, by voxels,
-    /// with its enclosed voids); only a piece whose shell, smoothed,
-    /// encloses under a sixteenth of a voxel (a probability map's voxel a
-    /// hair over the threshold, a lone voxel of a label), finer than the
-    /// scan resolves, is dropped.
+    /// with its enclosed voids); only a piece finer than the scan
+    /// resolves is dropped: under a voxel as marched (a probability map's
+    /// voxel a hair over the threshold, a lone voxel of a label) and under
+    /// a sixteenth of a voxel smoothed.
     #[arg(long)]
     all_components: bool,
     /// Fill the enclosed voids of the kept pieces (a ventricle inside the
@@ -203,7 +203,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if f.report.islands_unresolved > 0 {
         println!(
-            "  dropped {} of the {} pieces: their shells enclosed under a sixteenth of a voxel smoothed, finer than the scan resolves",
+            "  dropped {} of the {} pieces, finer than the scan resolves: under a voxel as marched, under a sixteenth smoothed",
             f.report.islands_unresolved, f.report.components
         );
     }

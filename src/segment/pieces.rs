@@ -15,6 +15,8 @@
 //! from the shells of its own voids (keeping the largest surface would drop
 //! them and count the voids as tissue).
 
+use std::collections::BTreeSet;
+
 use crate::error::Result;
 use crate::mesh::dsu::DisjointSets;
 use crate::mesh::submesh::extract;
@@ -211,14 +213,27 @@ pub fn numbered_voids(
 /// voxel is under half a voxel across, finer than the scan resolves.
 pub const LEAST_VOID: f64 = 1.0 / 16.0;
 
+/// An island (a piece kept beside the largest) is dropped as finer than
+/// the scan resolves only if it also enclosed under this as marched,
+/// voxels: a voxel a hair over the level encloses next to nothing, a lone
+/// voxel of a label an octahedron of a sixth. A larger one the scan does
+/// resolve, though the windowed sinc can shrink a block of 2 x 2 x 2
+/// voxels (5.7 as marched) to a speck of 0.012: kept, a speck (tissue,
+/// where a void so shrunk is filled).
+pub const LEAST_ISLAND: f64 = 1.0;
+
 /// The closed shells of a surface `segment::mesh` marched, told apart
 /// before the smoothing moves them: each vertex's shell, the void each
 /// inner shell faces into, and the island (a piece other than the largest,
 /// kept by `--all-components`) each outer shell is round.
 pub struct Shells {
     shell_of: Vec<u32>,
+    /// Each shell's enclosed volume as marched, voxels.
+    marched: Vec<f64>,
     void: Vec<Option<u32>>,
     island: Vec<Option<u32>>,
+    /// The void an island's shell lies in, if any.
+    island_in: Vec<Option<u32>>,
 }
 
 /// The shells of `mesh` as marched (voxel coordinates), their voids
@@ -241,10 +256,8 @@ pub fn shells(
         sets.union(t[0] as usize, t[2] as usize);
     }
     let (shell_of, shells) = sets.labels();
-    let inner: Vec<bool> = shell_volumes(mesh, &shell_of, shells)
-        .iter()
-        .map(|&v| v < 0.0)
-        .collect();
+    let marched = shell_volumes(mesh, &shell_of, shells);
+    let inner: Vec<bool> = marched.iter().map(|&v| v < 0.0).collect();
     let [nx, ny, nz] = size.map(|n| n as i64);
     let voxel = |c: glam::I64Vec3| -> Option<usize> {
         let within = (0..nx).contains(&c.x) && (0..ny).contains(&c.y) && (0..nz).contains(&c.z);
@@ -256,6 +269,7 @@ pub fn shells(
         found.ok().map(|k| islands[k].1)
     };
     let (mut void, mut island) = (vec![None; shells], vec![None; shells]);
+    let mut island_in = vec![None; shells];
     let mut told = vec![false; shells];
     for (v, p) in mesh.positions.iter().enumerate() {
         let shell = shell_of[v] as usize;
@@ -270,18 +284,23 @@ pub fn shells(
         let mut high = low;
         high[3 - a - b] += 1;
         // One end is inside, the other outside: the shell's void, or its
-        // island (none: the largest piece).
-        let mut ends = [low, high].map(voxel).into_iter().flatten();
+        // island (none: the largest piece) and the void that lies in.
+        let ends = || [low, high].map(voxel).into_iter().flatten();
         match inner[shell] {
-            true => void[shell] = ends.find_map(void_at),
-            false => island[shell] = ends.find_map(island_at),
+            true => void[shell] = ends().find_map(void_at),
+            false => {
+                island[shell] = ends().find_map(island_at);
+                island_in[shell] = ends().find_map(void_at);
+            }
         }
         told[shell] = true;
     }
     Shells {
         shell_of,
+        marched,
         void,
         island,
+        island_in,
     }
 }
 
@@ -309,14 +328,15 @@ pub struct Unresolved {
 
 /// Fills the voids whose inner shells (`shells`, told apart as marched)
 /// enclose under `LEAST_VOID` in `mesh` as smoothed (voxel coordinates),
-/// and drops the islands whose outer shells do (finer than the scan
-/// resolves, the same way: a probability map's voxel a hair over the
-/// level, which Taubin shrinks to next to nothing; the MNI white matter
-/// at 0.5 kept whole has 49 pieces, whose smallest the decimation left as
-/// four faces of no volume, a mean curvature up to 1,600 per mm). Their
-/// shells leave the mesh; the voids' voxels (`void_of`, of `voids`) join
-/// `kept`, the islands' (`islands`, as `shells` took them) leave it. (A
-/// piece of tissue inside a filled void keeps its own shell.)
+/// and drops the islands whose outer shells do and enclosed under
+/// `LEAST_ISLAND` as marched (finer than the scan resolves, the same way:
+/// a probability map's voxel a hair over the level, a lone voxel; the MNI
+/// white matter at 0.5 kept whole has 49 pieces, whose smallest the
+/// decimation left as four faces of no volume, a mean curvature up to
+/// 1,600 per mm). Their shells leave the mesh; the voids' voxels
+/// (`void_of`, of `voids`) join `kept`, the islands' (`islands`, as
+/// `shells` took them) leave it, unless they lie in a void filled. (A
+/// larger piece of tissue inside a filled void keeps its own shell.)
 pub fn drop_unresolved(
     mesh: &mut TriMesh,
     shells: &Shells,
@@ -326,7 +346,7 @@ pub fn drop_unresolved(
 ) -> Unresolved {
     let enclosed = shell_volumes(mesh, &shells.shell_of, shells.void.len());
     let mut fill = vec![false; voids];
-    let mut gone = std::collections::BTreeSet::new();
+    let mut gone = BTreeSet::new();
     let dropped: Vec<bool> = (0..enclosed.len())
         .map(|shell| {
             if enclosed[shell].abs() >= LEAST_VOID {
@@ -334,7 +354,9 @@ pub fn drop_unresolved(
             }
             match (shells.void[shell], shells.island[shell]) {
                 (Some(void), _) => fill[void as usize] = true,
-                (_, Some(island)) => _ = gone.insert(island),
+                (_, Some(island)) if shells.marched[shell] < LEAST_ISLAND => {
+                    _ = gone.insert(island)
+                }
                 _ => return false,
             }
             true
@@ -343,6 +365,14 @@ pub fn drop_unresolved(
     for (k, &v) in kept.iter_mut().zip(void_of) {
         if v != NONE && fill[v as usize] {
             *k = true;
+        }
+    }
+    // An island dropped in a void filled is tissue with it.
+    for (island, void) in shells.island.iter().zip(&shells.island_in) {
+        if let (Some(island), Some(void)) = (island, void)
+            && fill[*void as usize]
+        {
+            gone.remove(island);
         }
     }
     for &(voxel, island) in islands {
@@ -359,7 +389,11 @@ pub fn drop_unresolved(
     }
     Unresolved {
         voids: fill.iter().filter(|&&f| f).count(),
-        islands: gone.len(),
+        islands: dropped
+            .iter()
+            .zip(&shells.island)
+            .filter(|&(&d, i)| d && i.is_some())
+            .count(),
     }
 }
 

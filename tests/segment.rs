@@ -248,17 +248,15 @@ fn shells(mesh: &organtex::mesh::TriMesh) -> Vec<(usize, f64)> {
     pieces.into_values().collect()
 }
 
-/// A probability map's voids can be specks: a voxel just under the level
-/// encloses a shell far smaller than a voxel, and the smoothing shrinks
-/// a void of one voxel to a speck too (the MNI grey matter at 0.5 has
-/// 231 voids, 173 of them under a sixteenth of a voxel smoothed). Those
-/// are filled; a void of a few voxels stays an inner shell, and
-/// decimated (the smallest pieces are the cheapest to collapse) keeps at
-/// least four faces enclosing a volume, with the angles kept: not a
-/// doubled triangle (there were 211 in the grey matter, with angles of
-/// 5 degrees).
-#[test]
-fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
+/// A probability map of a ball of radius 12 voxels in a cube of 32 (voxels
+/// 0.5 mm apart), at the level 127.5 on its sphere, with the voxels `set`
+/// to the values given: the volume, how many voxels are at the level or
+/// over it, and the options that mesh it to 600 faces (`all_components`
+/// as asked).
+fn probability_ball(
+    set: &[([usize; 3], f32)],
+    all_components: bool,
+) -> (ScalarVolume, u64, MeshOptions) {
     let n = 32;
     let centre = DVec3::splat(15.5);
     let mut values = Vec::new();
@@ -270,17 +268,8 @@ fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
             }
         }
     }
-    let at = |x: usize, y: usize, z: usize| (z * n + y) * n + x;
-    // Three voxels a hair under the level, one far under it, and two
-    // blocks of 2 x 2 x 2 far under it.
-    for [x, y, z] in [[11, 15, 15], [20, 15, 15], [15, 11, 15]] {
-        values[at(x, y, z)] = 127.4;
-    }
-    values[at(15, 20, 15)] = 0.0;
-    for [x, y, z] in [[14, 14, 10], [14, 14, 19]] {
-        for d in 0..8 {
-            values[at(x + (d & 1), y + (d >> 1 & 1), z + (d >> 2))] = 0.0;
-        }
+    for &([x, y, z], value) in set {
+        values[(z * n + y) * n + x] = value;
     }
     let level = 127.5;
     let inside = values.iter().filter(|&&v| v >= level).count() as u64;
@@ -293,12 +282,42 @@ fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
         region: Region::Threshold(level as f64),
         smooth: segment::DEFAULT_SMOOTH,
         smoother: Default::default(),
-        all_components: false,
+        all_components,
         fill_voids: false,
         faces: Some(600),
         max_handle: None,
         within_voxels: None,
     };
+    (volume, inside, opts)
+}
+
+/// The 2 x 2 x 2 voxels from `corner` up, each set to `value`.
+fn block(corner: [usize; 3], value: f32) -> impl Iterator<Item = ([usize; 3], f32)> {
+    (0..8).map(move |d| {
+        let [x, y, z] = corner;
+        ([x + (d & 1), y + (d >> 1 & 1), z + (d >> 2)], value)
+    })
+}
+
+/// A probability map's voids can be specks: a voxel just under the level
+/// encloses a shell far smaller than a voxel, and the smoothing shrinks
+/// a void of one voxel to a speck too (the MNI grey matter at 0.5 has
+/// 231 voids, 173 of them under a sixteenth of a voxel smoothed). Those
+/// are filled; a void of a few voxels stays an inner shell, and
+/// decimated (the smallest pieces are the cheapest to collapse) keeps at
+/// least four faces enclosing a volume, with the angles kept: not a
+/// doubled triangle (there were 211 in the grey matter, with angles of
+/// 5 degrees).
+#[test]
+fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
+    // Three voxels a hair under the level, one far under it, and two
+    // blocks of 2 x 2 x 2 far under it.
+    let mut set: Vec<([usize; 3], f32)> = [[11, 15, 15], [20, 15, 15], [15, 11, 15]]
+        .map(|v| (v, 127.4))
+        .to_vec();
+    set.push(([15, 20, 15], 0.0));
+    set.extend(block([14, 14, 10], 0.0).chain(block([14, 14, 19], 0.0)));
+    let (volume, inside, opts) = probability_ball(&set, false);
     let (mesh, report) = segment::mesh(&volume, Path::new("ball.nii"), &opts, &Silent).unwrap();
     assert_eq!(
         (report.voids, report.voids_unresolved),
@@ -384,44 +403,14 @@ fn a_probability_maps_voids_stay_shells_unless_finer_than_a_voxel() {
 /// eight voxels stays, a closed shell enclosing a volume.
 #[test]
 fn islands_finer_than_a_voxel_are_dropped_from_every_piece_kept() {
-    let n = 32;
-    let centre = DVec3::splat(15.5);
-    let mut values = Vec::new();
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let r = (DVec3::new(x as f64, y as f64, z as f64) - centre).length();
-                values.push((128.0 + 40.0 * (12.0 - r)).clamp(0.0, 255.0) as f32);
-            }
-        }
-    }
-    let at = |x: usize, y: usize, z: usize| (z * n + y) * n + x;
     // In the corners, far from the ball and from each other: three voxels
     // a hair over the level, one far over it, a block of 2 x 2 x 2.
-    for [x, y, z] in [[2, 2, 2], [29, 2, 2], [2, 29, 2]] {
-        values[at(x, y, z)] = 127.6;
-    }
-    values[at(29, 29, 2)] = 255.0;
-    for d in 0..8 {
-        values[at(2 + (d & 1), 2 + (d >> 1 & 1), 27 + (d >> 2))] = 255.0;
-    }
-    let level = 127.5;
-    let inside = values.iter().filter(|&&v| v >= level).count() as u64;
-    let volume = ScalarVolume {
-        size: [n; 3],
-        values,
-        to_world: DAffine3::from_scale(DVec3::splat(0.5)),
-    };
-    let opts = MeshOptions {
-        region: Region::Threshold(level as f64),
-        smooth: segment::DEFAULT_SMOOTH,
-        smoother: Default::default(),
-        all_components: true,
-        fill_voids: false,
-        faces: Some(600),
-        max_handle: None,
-        within_voxels: None,
-    };
+    let mut set: Vec<([usize; 3], f32)> = [[2, 2, 2], [29, 2, 2], [2, 29, 2]]
+        .map(|v| (v, 127.6))
+        .to_vec();
+    set.push(([29, 29, 2], 255.0));
+    set.extend(block([2, 2, 27], 255.0));
+    let (volume, inside, opts) = probability_ball(&set, true);
     let mesh_of = |opts: &MeshOptions| {
         let (mesh, report) =
             segment::mesh(&volume, Path::new("islands.nii"), opts, &Silent).unwrap();

@@ -178,7 +178,7 @@ pub struct MeshOptions {
     pub smooth: usize,
     pub smoother: Smoother,
     /// Keep every connected piece, not only the largest (but those finer
-    /// than the scan resolves: `pieces::LEAST_VOID`).
+    /// than the scan resolves: `pieces::LEAST_ISLAND`).
     pub all_components: bool,
     /// Fill the kept pieces' enclosed voids (default: each void is an
     /// inner shell of the surface, facing into it, unless finer than the
@@ -265,9 +265,10 @@ pub struct MeshReport {
     /// `pieces::LEAST_VOID` voxel, finer than the scan resolves: filled
     /// (counted in `voxels`).
     pub voids_unresolved: usize,
-    /// Of the pieces `all_components` keeps, those whose shell, smoothed,
-    /// enclosed under `pieces::LEAST_VOID` voxel: dropped (not counted in
-    /// `components_kept` nor in `voxels`).
+    /// Of the pieces `all_components` keeps, those under
+    /// `pieces::LEAST_ISLAND` voxel as marched whose shell, smoothed,
+    /// enclosed under `pieces::LEAST_VOID`: dropped (not counted in
+    /// `components_kept`, nor in `voxels` unless in a void filled).
     pub islands_unresolved: usize,
     pub vertices: usize,
     pub faces: usize,

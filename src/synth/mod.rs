@@ -15,4 +15,3 @@ pub mod sweep;
 pub mod vessel_tree;
 pub mod vessels;
 pub mod volume;
-pub mod wrap;

@@ -391,6 +391,8 @@ fn the_default_scene_bakes_with_seams_and_borders_blended_away() {
     );
     let r = &baked.report;
     assert_eq!(r.mode, "layered");
+    // A generated cavity: no segmentation meshed, none reported.
+    assert!(r.segmentations.is_empty());
     // The uterus's interior: a block layered by depth from the
     // database's layered wall (issue 28), at the scene's scale. It tiles
     // across the layers (x, z); along y its rows follow the exemplar's,

@@ -952,6 +952,27 @@ fn a_scene_from_the_mni_brain_bakes_end_to_end() {
         report["facets"][0]["faces"].as_u64().unwrap() as usize,
         mesh.num_faces()
     );
+    // What meshing the segmentation measured, in the report and on screen:
+    // the same surface, its volume within 1% of the voxels'.
+    let seg = &report["segmentations"][0];
+    assert_eq!(seg["node"], "brain", "{report}");
+    assert_eq!(
+        seg["mesh"]["faces"].as_u64().unwrap() as usize,
+        mesh.num_faces()
+    );
+    let (volume, voxels) = (
+        seg["mesh"]["volume"].as_f64().unwrap(),
+        seg["mesh"]["voxel_volume"].as_f64().unwrap(),
+    );
+    assert!((volume / voxels - 1.0).abs() < 0.01, "{seg}");
+    assert!(
+        seg["mesh"]["fit"]["points"].as_u64().unwrap() > 10_000,
+        "{seg}"
+    );
+    assert!(
+        stdout.contains("node 'brain' meshed from its segmentation"),
+        "{stdout}"
+    );
     let tets = &report["interiors"][0]["tet_mesh"];
     assert!(tets["tets"].as_u64().unwrap() > 10_000, "{report}");
     assert!(tets["min_dihedral"].as_f64().unwrap() > 10.0, "{report}");

@@ -119,7 +119,18 @@ pub struct BakeReport {
     pub facets: Vec<FacetLine>,
     pub borders: Vec<BorderLine>,
     pub interiors: Vec<InteriorLine>,
+    /// The nodes meshed from a segmentation, each with what meshing it
+    /// measured (as `organtex mesh --json` gives it); absent when none is.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub segmentations: Vec<SegmentationLine>,
     pub timings: Timings,
+}
+
+/// A node meshed from a CT or MRI segmentation.
+#[derive(Clone, Debug, Serialize)]
+pub struct SegmentationLine {
+    pub node: String,
+    pub mesh: crate::segment::MeshReport,
 }
 
 /// Where the bake wrote its files, and its report.
@@ -260,6 +271,17 @@ pub fn bake(
         facets,
         borders,
         interiors: interiors.iter().map(|i| i.line.clone()).collect(),
+        segmentations: spec
+            .nodes
+            .iter()
+            .zip(&prepared.segmented)
+            .filter_map(|(node, report)| {
+                report.clone().map(|mesh| SegmentationLine {
+                    node: node.name.clone(),
+                    mesh,
+                })
+            })
+            .collect(),
         timings: Timings {
             build_s,
             interior_s,

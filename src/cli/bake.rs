@@ -134,6 +134,46 @@ fn print(baked: &Baked) {
         "scene {} ({} mode), baked in {:.1} s",
         r.scene, r.mode, r.timings.total_s
     );
+    for s in &r.segmentations {
+        let m = &s.mesh;
+        let mut pieces = match m.components {
+            1 => "its one piece".to_string(),
+            n => format!("{} of {n} pieces kept", m.components_kept),
+        };
+        if m.islands_unresolved > 0 {
+            pieces += &format!(
+                " ({} dropped, finer than the scan resolves)",
+                m.islands_unresolved
+            );
+        }
+        let voids = match (m.voids, m.voids_filled) {
+            (0, _) => "no enclosed void".to_string(),
+            (n, true) => format!("{n} enclosed voids filled"),
+            (n, false) => format!(
+                "{n} enclosed voids kept as inner shells ({} finer than the scan resolves filled)",
+                m.voids_unresolved
+            ),
+        };
+        let farthest = m
+            .fit
+            .farthest
+            .map_or(String::new(), |d| format!(", the farthest {d:.2}"));
+        println!(
+            "  node '{}' meshed from its segmentation: {pieces}, {voids}; {} faces, volume {:+.2}% of the voxels'; {} of the voxel boundary's {} points farther than {} voxel from the surface{farthest}",
+            s.node,
+            super::thousands(m.faces),
+            100.0 * (m.volume / m.voxel_volume - 1.0),
+            super::thousands(m.fit.far),
+            super::thousands(m.fit.points),
+            organtex::segment::fit::TOLERANCE,
+        );
+        if let Some(h) = &m.handles {
+            println!(
+                "    handles thinner than {} mm: genus {} -> {}",
+                h.max_handle, h.genus_before, h.genus_after
+            );
+        }
+    }
     println!(
         "  {:<24} {:<16} {:>7} {:>6} {:>8} {:>7} {:>10}",
         "facet", "tissue", "faces", "charts", "seam", "conf", "seam blend"

@@ -23,6 +23,7 @@ use crate::error::{Error, Result};
 use crate::mesh::repair::make_manifold;
 use crate::mesh::{Facets, Topology, TriMesh, io};
 use crate::progress::{CancelOnly, Progress, Span, check, timed};
+use crate::segment::MeshReport;
 use crate::unwrap::flatten::Method;
 use crate::unwrap::intersect::overlapping_pairs;
 use crate::unwrap::metrics::UvMetrics;
@@ -167,6 +168,9 @@ pub struct PreparedScene {
     pub tissues: Tissues,
     /// Per node, its mesh and topology.
     pub meshes: Vec<(TriMesh, Topology)>,
+    /// Per node, what meshing its segmentation measured (none for a mesh
+    /// file or a generated cavity).
+    pub segmented: Vec<Option<MeshReport>>,
     /// The database outputs' and the meshes' times.
     pub spans: Vec<Span>,
 }
@@ -181,17 +185,20 @@ pub fn prepare_scene(spec: &SceneSpec, progress: &dyn Progress) -> Result<Prepar
     let tissues = timed(&mut spans, "tissues", "database", || {
         ensure_tissues(spec, &database, progress)
     })?;
-    let mut meshes = Vec::new();
+    let (mut meshes, mut segmented) = (Vec::new(), Vec::new());
     for node in &spec.nodes {
         check(progress)?;
-        meshes.push(timed(&mut spans, "mesh", &node.name, || {
-            node_mesh(node, progress)
-        })?);
+        let (mesh, topology, report) = timed(&mut spans, "mesh", &node.name, || {
+            node_mesh_reported(node, progress)
+        })?;
+        meshes.push((mesh, topology));
+        segmented.push(report);
     }
     Ok(PreparedScene {
         spec: spec.clone(),
         tissues,
         meshes,
+        segmented,
         spans,
     })
 }
@@ -304,6 +311,17 @@ pub fn ensure_tissues(
 /// its topology. `progress` sees a segmentation meshed (the one source
 /// that takes seconds) and may cancel it.
 pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, Topology)> {
+    node_mesh_reported(node, progress).map(|(mesh, topology, _)| (mesh, topology))
+}
+
+/// `node_mesh`, with what meshing a segmentation measured (`organtex
+/// mesh`'s figures: pieces kept and dropped, voids, genus, volume, how
+/// near the voxels), for the bake's report.
+pub fn node_mesh_reported(
+    node: &NodeSpec,
+    progress: &dyn Progress,
+) -> Result<(TriMesh, Topology, Option<MeshReport>)> {
+    let mut segmented = None;
     let mut mesh = match &node.mesh {
         MeshSpec::File(path) => io::read(path)?,
         MeshSpec::UterineCavity(params) => uterus::generate(params).map_err(|e| {
@@ -312,12 +330,16 @@ pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, T
                 node.name, e.key, e.msg
             ))
         })?,
-        MeshSpec::Segmentation(seg) => segmentation_mesh(seg, progress).map_err(|e| match e {
-            Error::Cancelled => e,
-            e => node
-                .origin
-                .error(format!("node '{}': mesh.segmentation: {e}", node.name)),
-        })?,
+        MeshSpec::Segmentation(seg) => {
+            let (mesh, report) = segmentation_mesh(seg, progress).map_err(|e| match e {
+                Error::Cancelled => e,
+                e => node
+                    .origin
+                    .error(format!("node '{}': mesh.segmentation: {e}", node.name)),
+            })?;
+            segmented = Some(report);
+            mesh
+        }
     };
     let topology = match Topology::build(&mesh) {
         Ok(t) => t,
@@ -332,7 +354,7 @@ pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, T
             of_face: vec![0; mesh.num_faces()],
         });
     }
-    Ok((mesh, topology))
+    Ok((mesh, topology, segmented))
 }
 
 /// The surface of a `[node.mesh.segmentation]`, as `organtex mesh` makes
@@ -341,7 +363,7 @@ pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, T
 fn segmentation_mesh(
     seg: &crate::scene::file::Segmentation,
     progress: &dyn Progress,
-) -> Result<TriMesh> {
+) -> Result<(TriMesh, MeshReport)> {
     let choice = seg.choice().map_err(Error::invalid)?;
     let (volume, region) = crate::segment::open(&seg.file, &choice)?;
     let opts = crate::segment::MeshOptions {
@@ -354,8 +376,7 @@ fn segmentation_mesh(
         within_voxels: seg.within_voxels,
         smoother: seg.smoother,
     };
-    let (mesh, _) = crate::segment::mesh(&volume, &seg.file, &opts, progress)?;
-    Ok(mesh)
+    crate::segment::mesh(&volume, &seg.file, &opts, progress)
 }
 
 /// Each of the mesh's facets' settings: the entry named after it, else the

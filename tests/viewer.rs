@@ -594,6 +594,18 @@ fn opening_a_segmentation_asks_which_label_and_meshes_it() {
         "it waits for Unwrap, as a bare mesh does"
     );
     assert_eq!(doc.spec.name, "balls");
+    // What meshing found, kept with the document and shown beside it.
+    let report = doc.segmented[0]
+        .as_ref()
+        .expect("meshed from a segmentation");
+    assert_eq!(report.faces, doc.meshes[0].num_faces());
+    assert_eq!((report.components, report.components_kept), (1, 1));
+    let summary = report.summary();
+    assert!(
+        summary.starts_with("its one piece, no enclosed void"),
+        "{summary}"
+    );
+    h.get_by_label_contains(&summary);
     // Label 2's ball, in world millimetres: its centre through the
     // transform, its radius within a voxel.
     let (lo, hi) = doc.bounds().unwrap();

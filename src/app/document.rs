@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::mesh::{Topology, TriMesh};
-use crate::scene::build::{BakedScene, match_facets, node_mesh};
+use crate::scene::build::{BakedScene, match_facets, node_mesh_reported};
 use crate::scene::file::{
     self, BakeSettings, Camera, FacetSettings, Interior, MeshSpec, NodeSpec, Origin, SceneSpec,
 };
@@ -23,6 +23,9 @@ pub struct Document {
     pub topologies: Vec<Topology>,
     /// Each mesh with its openings closed (`solid::capped`), for cuts.
     pub closed: Vec<(TriMesh, Topology)>,
+    /// Per node, what meshing its segmentation measured (none for a mesh
+    /// file or a generated cavity).
+    pub segmented: Vec<Option<crate::segment::MeshReport>>,
     /// Set by an unwrap; dropped when the cut must be redone.
     pub baked: Option<BakedScene>,
 }
@@ -93,8 +96,10 @@ impl Document {
         file::check_tissues(&spec, &ids)?;
         let mut meshes = Vec::new();
         let mut topologies = Vec::new();
+        let mut segmented = Vec::new();
         for node in &mut spec.nodes {
-            let (mesh, topology) = node_mesh(node, progress)?;
+            let (mesh, topology, report) = node_mesh_reported(node, progress)?;
+            segmented.push(report);
             let names = mesh
                 .facets
                 .as_ref()
@@ -118,6 +123,7 @@ impl Document {
             meshes,
             topologies,
             closed,
+            segmented,
             baked: None,
         })
     }

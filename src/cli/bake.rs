@@ -136,36 +136,10 @@ fn print(baked: &Baked) {
     );
     for s in &r.segmentations {
         let m = &s.mesh;
-        let mut pieces = match m.components {
-            1 => "its one piece".to_string(),
-            n => format!("{} of {n} pieces kept", m.components_kept),
-        };
-        if m.islands_unresolved > 0 {
-            pieces += &format!(
-                " ({} dropped, finer than the scan resolves)",
-                m.islands_unresolved
-            );
-        }
-        let voids = match (m.voids, m.voids_filled) {
-            (0, _) => "no enclosed void".to_string(),
-            (n, true) => format!("{n} enclosed voids filled"),
-            (n, false) => format!(
-                "{n} enclosed voids kept as inner shells ({} finer than the scan resolves filled)",
-                m.voids_unresolved
-            ),
-        };
-        let farthest = m
-            .fit
-            .farthest
-            .map_or(String::new(), |d| format!(", the farthest {d:.2}"));
         println!(
-            "  node '{}' meshed from its segmentation: {pieces}, {voids}; {} faces, volume {:+.2}% of the voxels'; {} of the voxel boundary's {} points farther than {} voxel from the surface{farthest}",
+            "  node '{}' meshed from its segmentation: {}",
             s.node,
-            super::thousands(m.faces),
-            100.0 * (m.volume / m.voxel_volume - 1.0),
-            super::thousands(m.fit.far),
-            super::thousands(m.fit.points),
-            organtex::segment::fit::TOLERANCE,
+            m.summary()
         );
         if let Some(h) = &m.handles {
             println!(

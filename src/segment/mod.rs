@@ -283,6 +283,46 @@ pub struct MeshReport {
     pub handles: Option<handles::HandleFix>,
 }
 
+impl MeshReport {
+    /// One line for a person: the pieces and voids kept, the faces, the
+    /// volume against the voxels', and the voxel boundary's points left
+    /// farther than `fit::TOLERANCE` from the surface (the bake's output,
+    /// the viewer's side panel).
+    pub fn summary(&self) -> String {
+        use crate::progress::thousands;
+        let mut pieces = match self.components {
+            1 => "its one piece".to_string(),
+            n => format!("{} of {n} pieces kept", self.components_kept),
+        };
+        if self.islands_unresolved > 0 {
+            pieces += &format!(
+                " ({} dropped, finer than the scan resolves)",
+                self.islands_unresolved
+            );
+        }
+        let voids = match (self.voids, self.voids_filled) {
+            (0, _) => "no enclosed void".to_string(),
+            (n, true) => format!("{n} enclosed voids filled"),
+            (n, false) => format!(
+                "{n} enclosed voids kept as inner shells ({} finer than the scan resolves filled)",
+                self.voids_unresolved
+            ),
+        };
+        let farthest = self
+            .fit
+            .farthest
+            .map_or(String::new(), |d| format!(", the farthest {d:.2}"));
+        format!(
+            "{pieces}, {voids}; {} faces, volume {:+.2}% of the voxels'; {} of the voxel boundary's {} points farther than {} voxel from the surface{farthest}",
+            thousands(self.faces),
+            100.0 * (self.volume / self.voxel_volume - 1.0),
+            thousands(self.fit.far),
+            thousands(self.fit.points),
+            fit::TOLERANCE,
+        )
+    }
+}
+
 /// The surface of `region` in `volume`. `name` names the file in errors.
 pub fn mesh(
     volume: &ScalarVolume,

@@ -12,6 +12,12 @@ impl Viewer {
             return;
         };
         ui.heading(&doc.spec.name);
+        // What meshing a segmentation found, as `organtex mesh` says it.
+        for (node, report) in doc.spec.nodes.iter().zip(&doc.segmented) {
+            if let Some(report) = report {
+                ui.small(format!("{}: {}", node.name, report.summary()));
+            }
+        }
         ui.label("Facets");
         let facets = doc.facets();
         let mut select = None;

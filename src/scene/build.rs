@@ -315,8 +315,8 @@ pub fn node_mesh(node: &NodeSpec, progress: &dyn Progress) -> Result<(TriMesh, T
 }
 
 /// `node_mesh`, with what meshing a segmentation measured (`organtex
-/// mesh`'s figures: pieces kept and dropped, voids, genus, volume, how
-/// near the voxels), for the bake's report.
+/// mesh`'s figures: pieces kept and dropped, voids, volume, how near the
+/// voxels), for the bake's report and the viewer.
 pub fn node_mesh_reported(
     node: &NodeSpec,
     progress: &dyn Progress,

@@ -302,11 +302,21 @@ impl MeshReport {
         }
         let voids = match (self.voids, self.voids_filled) {
             (0, _) => "no enclosed void".to_string(),
+            (1, true) => "its enclosed void filled".to_string(),
             (n, true) => format!("{n} enclosed voids filled"),
-            (n, false) => format!(
-                "{n} enclosed voids kept as inner shells ({} finer than the scan resolves filled)",
-                self.voids_unresolved
-            ),
+            (n, false) => {
+                let mut kept = match n {
+                    1 => "an enclosed void kept as an inner shell".to_string(),
+                    n => format!("{n} enclosed voids kept as inner shells"),
+                };
+                if self.voids_unresolved > 0 {
+                    kept += &format!(
+                        " ({} of them finer than the scan resolves, filled)",
+                        self.voids_unresolved
+                    );
+                }
+                kept
+            }
         };
         let farthest = self
             .fit

@@ -68,8 +68,16 @@ pub fn seam_bands(mesh: &TriMesh, topo: &Topology, rings: usize) -> Vec<BandFace
     }
 
     // Faces reached from each side of each seam edge without crossing a
-    // seam, each keeping the similarity of the seam edge it came from.
+    // seam, each keeping the similarity of the seam edge it came from. A
+    // face on two seam edges whose far sides differ (between two branches
+    // of the cut at a junction) can continue only one far side: it takes
+    // the edge whose far side lies farthest off in the texture, so the step
+    // left on the other is the smaller one (on a branch one edge long to a
+    // terminal, whose sides meet at its tip, it falls to nothing there; on
+    // the default scene's polyp, the edge left unblended had been the
+    // main cut's and showed its whole step).
     let mut reached: Vec<Option<(DVec2, DVec2, DVec2, DVec2)>> = vec![None; mesh.num_faces()];
+    let mut apart = vec![0.0; mesh.num_faces()];
     let mut faces = VecDeque::new();
     for &e in &seams {
         let h = topo.edge_halfedge(e);
@@ -79,10 +87,17 @@ pub fn seam_bands(mesh: &TriMesh, topo: &Topology, rings: usize) -> Vec<BandFace
             let (a_here, b_here) = (uv(this), uv(topo.next(this)));
             let (b_there, a_there) = (uv(other), uv(topo.next(other)));
             let f = topo.face(this).idx();
-            if reached[f].is_none() && a_here != b_here {
-                reached[f] = Some((a_here, b_here, a_there, b_there));
-                faces.push_back(f);
+            if a_here == b_here {
+                continue;
             }
+            let gap = (a_there - a_here).length() + (b_there - b_here).length();
+            if reached[f].is_none() {
+                faces.push_back(f);
+            } else if gap <= apart[f] {
+                continue;
+            }
+            reached[f] = Some((a_here, b_here, a_there, b_there));
+            apart[f] = gap;
         }
     }
     while let Some(f) = faces.pop_front() {
@@ -230,5 +245,61 @@ mod tests {
         }
         // Alpha falls to 0 at the band's edge.
         assert!(band.iter().any(|b| b.alpha.contains(&0.0)));
+    }
+
+    /// A face on two seam edges whose far sides differ (between two
+    /// branches of the cut at a junction) continues the edge whose far side
+    /// lies farther off, exactly at both its ends: the step it must leave
+    /// on the other edge is the smaller one.
+    #[test]
+    fn a_face_between_two_branches_continues_the_wider_seam() {
+        let sphere = icosphere(3);
+        let u = unwrap(&sphere, &UnwrapOptions::default(), &Silent).unwrap();
+        let (topo, layer) = (&u.topology, u.mesh.uvs.as_ref().unwrap());
+        let band = seam_bands(&u.mesh, topo, 2);
+        let seams = seam_edges(topo, layer);
+        let uv = |h: HalfedgeId| layer.coords[layer.triangles[h.idx() / 3][h.idx() % 3] as usize];
+        let mut sectors = 0;
+        for b in &band {
+            let f = crate::mesh::FaceId::from(b.face as usize);
+            // Its seam edges: the far side's uvs of their ends, and how far
+            // off they lie.
+            let far: Vec<([DVec2; 2], f64)> = topo
+                .face_halfedges(f)
+                .into_iter()
+                .filter(|&h| seams.contains(&topo.edge(h)))
+                .map(|h| {
+                    let t = topo.twin(h).unwrap();
+                    let there = [uv(topo.next(t)), uv(t)];
+                    let gap = (there[0] - uv(h)).length() + (there[1] - uv(topo.next(h))).length();
+                    (there, gap)
+                })
+                .collect();
+            if far.len() < 2
+                || far.iter().all(|(there, _)| {
+                    // Far sides that agree at the shared corner: a bend.
+                    far.iter()
+                        .all(|(other, _)| other.iter().any(|p| there.contains(p)))
+                })
+            {
+                continue;
+            }
+            sectors += 1;
+            let (there, gap) = far
+                .iter()
+                .copied()
+                .find(|(there, _)| there.iter().all(|p| b.uv.contains(p)))
+                .expect("one seam edge continued exactly");
+            assert!(
+                far.iter().all(|&(_, g)| g <= gap),
+                "face {}: {far:?}",
+                b.face
+            );
+            assert!(there.iter().all(|p| b.uv.contains(p)));
+        }
+        assert!(
+            sectors > 0,
+            "the sphere's cut has no face between two branches"
+        );
     }
 }

@@ -649,6 +649,19 @@ fn atlases_have_no_overlapping_charts_and_hide_seams_and_borders() {
     assert!(facet("wall").facet.seen > 0.9 && facet("serosa").facet.seen < 0.2);
     assert_eq!(facet("wall").atlas.unwrap().into_iter().max(), Some(2048));
     assert_hidden(&baked.report, "atlas");
+    // Seam erasure joins each seam's two sides in the atlases' bilinear
+    // filtering (a facet without seams has nothing to erase).
+    for f in &baked.report.facets {
+        match (f.facet.seam_edges, f.atlas_seam_mismatch) {
+            (0, m) => assert!(m.is_none(), "{}", f.facet.facet),
+            (_, Some([baked, erased])) => assert!(
+                erased <= 0.6 && erased < baked,
+                "{}: seams {baked:.2} apart as baked, {erased:.2} erased",
+                f.facet.facet
+            ),
+            (_, None) => panic!("{} has seams but no erasure", f.facet.facet),
+        }
+    }
     let (json, _) = glb_chunks(&baked.glb);
     assert!(
         json["materials"]

@@ -55,8 +55,9 @@ impl Default for BakeOptions {
 pub struct FacetLine {
     #[serde(flatten)]
     pub facet: FacetReport,
-    /// Colour jump across seams over that across ordinary edges, as the
-    /// output shows it (1: seams invisible); null without seams.
+    /// Colour jump across seams over the jump beside them, as the output
+    /// shows it (1: seams invisible; `scene::contrast`); null without
+    /// seams.
     pub seam_contrast: Option<f64>,
     /// The same without seam bands and overlap rings.
     pub seam_contrast_unblended: Option<f64>,
@@ -66,6 +67,11 @@ pub struct FacetLine {
     pub atlas: Option<[usize; 2]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub atlas_texel_use: Option<f64>,
+    /// In atlas mode: how far apart (sRGB, 0-255, root mean square) the
+    /// two sides of its seams are in the atlas's filtering, as baked and
+    /// after seam erasure (`scene::seam_erasure`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atlas_seam_mismatch: Option<[f64; 2]>,
 }
 
 /// The facet-border figures of one node.
@@ -246,6 +252,7 @@ pub fn bake(
                 seam_contrast_unblended: u.seams[k],
                 atlas: atlas.map(|a| [a.width, a.height]),
                 atlas_texel_use: atlas.map(|a| a.texel_use),
+                atlas_seam_mismatch: atlas.and_then(|a| a.seam_mismatch),
             });
         }
         borders.push(BorderLine {
@@ -374,7 +381,11 @@ fn atlases(
             })
             .collect();
         check(progress)?;
-        let (b, u) = pairs.into_iter().unzip();
+        let (mut b, u): (Vec<Atlas>, Vec<Atlas>) = pairs.into_iter().unzip();
+        // The blended atlases' seams and borders joined in their filtering
+        // too; the unblended ones, which the contrast figures compare
+        // against, are left as baked.
+        atlas::erase(node, &mut b);
         blended.push(b);
         unblended.push(u);
     }

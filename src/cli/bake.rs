@@ -177,7 +177,7 @@ fn print(baked: &Baked) {
         }
     }
     println!(
-        "  contrast: colour jump across seams/borders over that across ordinary edges (1 = invisible)"
+        "  contrast: colour jump across seams/borders over the jump beside them (1 = invisible)"
     );
     let atlases: Vec<String> = r
         .facets
@@ -191,6 +191,20 @@ fn print(baked: &Baked) {
         println!(
             "  atlases (texels the facet covers): {}",
             atlases.join(", ")
+        );
+    }
+    let erased: Vec<String> = r
+        .facets
+        .iter()
+        .filter_map(|f| {
+            let [baked, erased] = f.atlas_seam_mismatch?;
+            Some(format!("{} {baked:.2} -> {erased:.2}", f.facet.facet))
+        })
+        .collect();
+    if !erased.is_empty() {
+        println!(
+            "  seams erased (their two sides' colours apart in the atlas, of 255): {}",
+            erased.join(", ")
         );
     }
     if let Some(density) = r.atlas_density

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::build::{BakedFacet, BakedNode};
 use super::composite::{Compositor, linear_to_srgb};
+use super::seam_erasure;
 use crate::raster;
 use crate::unwrap::metrics::bounds;
 
@@ -21,6 +22,12 @@ pub struct Atlas {
     pub pixels: Vec<[u8; 3]>,
     /// The share of texels the facet's own faces cover.
     pub texel_use: f64,
+    /// How far apart its seams' two sides are in its filtering
+    /// (`seam_erasure::mismatch`), as baked and after `erase`; `None`
+    /// without seams or before `erase`.
+    pub seam_mismatch: Option<[f64; 2]>,
+    /// Per texel: whether a face of its charts covers the texel's centre.
+    inside: Vec<bool>,
     lo: DVec2,
     /// Texels per uv (mesh) unit.
     density: f64,
@@ -31,7 +38,7 @@ const MARGIN: f64 = 4.0;
 
 impl Atlas {
     /// Texel coordinates (0..width, 0..height, v down) of chart uv `uv`.
-    fn texel(&self, uv: DVec2) -> DVec2 {
+    pub(super) fn texel(&self, uv: DVec2) -> DVec2 {
         (uv - self.lo) * self.density + DVec2::splat(MARGIN)
     }
 
@@ -45,27 +52,34 @@ impl Atlas {
         self.texel(uv) / DVec2::new(self.width as f64, self.height as f64)
     }
 
-    /// Bilinear sample at chart uv `uv`, in sRGB 0-255.
-    pub fn sample(&self, uv: DVec2) -> [f64; 3] {
-        let t = self.texel(uv) - DVec2::splat(0.5);
+    /// The four texels bilinear filtering reads at texel coordinates `p`
+    /// (clamped to the atlas), with their weights.
+    pub(super) fn taps(&self, p: DVec2) -> [(usize, f64); 4] {
+        let t = p - DVec2::splat(0.5);
         let (x0, y0) = (t.x.floor(), t.y.floor());
         let (fx, fy) = (t.x - x0, t.y - y0);
         let at = |x: f64, y: f64| {
             let xi = (x as i64).clamp(0, self.width as i64 - 1) as usize;
             let yi = (y as i64).clamp(0, self.height as i64 - 1) as usize;
-            self.pixels[yi * self.width + xi]
+            yi * self.width + xi
         };
-        let c = [
-            at(x0, y0),
-            at(x0 + 1.0, y0),
-            at(x0, y0 + 1.0),
-            at(x0 + 1.0, y0 + 1.0),
-        ];
-        std::array::from_fn(|i| {
-            let top = c[0][i] as f64 * (1.0 - fx) + c[1][i] as f64 * fx;
-            let bottom = c[2][i] as f64 * (1.0 - fx) + c[3][i] as f64 * fx;
-            top * (1.0 - fy) + bottom * fy
-        })
+        [
+            (at(x0, y0), (1.0 - fx) * (1.0 - fy)),
+            (at(x0 + 1.0, y0), fx * (1.0 - fy)),
+            (at(x0, y0 + 1.0), (1.0 - fx) * fy),
+            (at(x0 + 1.0, y0 + 1.0), fx * fy),
+        ]
+    }
+
+    /// Bilinear sample at chart uv `uv`, in sRGB 0-255.
+    pub fn sample(&self, uv: DVec2) -> [f64; 3] {
+        let mut c = [0.0; 3];
+        for (t, w) in self.taps(self.texel(uv)) {
+            for (i, v) in c.iter_mut().enumerate() {
+                *v += w * self.pixels[t][i] as f64;
+            }
+        }
+        c
     }
 }
 
@@ -123,7 +137,8 @@ pub fn density(nodes: &[BakedNode], largest: usize) -> f64 {
 /// unit (one density across the scene, so a tissue seen across a facet
 /// border is equally sharp on both sides; lower for a facet too wide for
 /// `largest` texels at it, which only a facet mostly out of sight can be):
-/// as wide and as tall as the facet's charts, plus margins.
+/// as wide and as tall as the facet's charts, plus margins. (`erase`
+/// then joins its seams and borders in the atlases' filtering.)
 pub fn bake(
     node: &BakedNode,
     facet: &BakedFacet,
@@ -144,6 +159,8 @@ pub fn bake(
         height,
         pixels: vec![[0, 0, 0]; width * height],
         texel_use: 0.0,
+        seam_mismatch: None,
+        inside: Vec::new(),
         lo,
         density,
     };
@@ -200,6 +217,7 @@ pub fn bake(
         best.iter().filter(|&&(d, _)| d == 0.0).count() as f64 / (width * height) as f64;
     let mut covered: Vec<bool> = best.iter().map(|&(_, f)| f != u32::MAX).collect();
     dilate(&mut atlas.pixels, &mut covered, [width, height], 4);
+    atlas.inside = best.iter().map(|&(d, _)| d == 0.0).collect();
     atlas
 }
 
@@ -235,5 +253,25 @@ fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], [width, height]: [usize;
                 }
             }
         }
+    }
+}
+
+/// Erase the seams and facet borders of `node` from its `atlases` (in
+/// facet order, `bake`d): what the compositor blends, the atlases'
+/// filtering then joins too (`seam_erasure`), noting in each atlas how
+/// far apart its seams' two sides were as baked and are after.
+pub fn erase(node: &BakedNode, atlases: &mut [Atlas]) {
+    let baked = seam_erasure::mismatch(node, atlases);
+    let inside: Vec<Vec<bool>> = atlases
+        .iter_mut()
+        .map(|a| std::mem::take(&mut a.inside))
+        .collect();
+    seam_erasure::erase(node, atlases, &inside);
+    for (a, inside) in atlases.iter_mut().zip(inside) {
+        a.inside = inside;
+    }
+    let erased = seam_erasure::mismatch(node, atlases);
+    for ((a, b), e) in atlases.iter_mut().zip(baked).zip(erased) {
+        a.seam_mismatch = b.zip(e).map(|(b, e)| [b, e]);
     }
 }

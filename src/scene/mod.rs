@@ -11,4 +11,5 @@ pub mod gltf;
 pub mod interior;
 pub mod kept_unwrap;
 pub mod manifest;
+pub mod seam_erasure;
 pub mod uterus;

@@ -267,48 +267,27 @@ fn every_entry_states_its_capture_and_surfaces_are_wet() {
 /// tiling, and gives the same bytes on any thread count and on a second
 /// call.
 ///
-/// Tiling is checked where the transfer acts: per CIELAB channel, the seam
-/// score (wrap jumps over interior jumps) moves at most 0.02, so the 8-bit
-/// rounding and the gamut's clamp left the wrap as continuous as the
-/// interior. The RGB seam score is not invariant under a transfer, and
-/// moves more (0.638 to 0.667 here): RGB mixes the channels, this
-/// texture's wrap is smoother than its interior in L* (0.65) than in a*
-/// and b* (0.81, 0.80), and the gains (L* 1.08, a* 1.58, b* 0.76) give
-/// chroma more weight. It must stay below 1 (the wrap no rougher than the
-/// interior).
+/// Tiling: the seam score (`quality::seam`, RGB wrap jumps over interior
+/// jumps) moves at most 0.02, here and on the default scene's myomas
+/// (the fundus tissue matched onto the mucosa and lightened 1.1x). That
+/// holds because the texture was rolled to a wrap as smooth against the
+/// interior in every direction of CIELAB (`synth::wrap`); rolled to the
+/// smoothest RGB sum, the porcine colon's score moved 0.638 to 0.667.
+/// Each CIELAB channel's own score must stay below 1 (the wrap no rougher
+/// than the interior): it moves by up to 0.025 (b*, whose spread the
+/// transfer narrows to 0.76x, so the 8-bit rounding is a larger share of
+/// its jumps).
 #[test]
 fn matching_a_tissue_moves_its_colours_and_keeps_its_tiling() {
     use organtex::db::build::{graded_colour, stats_of};
     use organtex::db::colour::{Grade, Grading, LabStats, to_lab};
     use organtex::synth::quality::{Rgb, seam, seam_by};
     let db = Database::open(&shipped()).unwrap();
-    let ids = ["porcine-colon".to_string(), "colon-mucosa".to_string()];
-    for id in &ids {
+    for id in ["porcine-colon", "colon-mucosa", "fundus-tissue"] {
         if !is_current(&db, db.tissue(id).unwrap()).unwrap() {
-            build(&db, std::slice::from_ref(id), &Silent).unwrap();
+            build(&db, &[id.to_string()], &Silent).unwrap();
         }
     }
-    let grading = Grading {
-        matched: Some("colon-mucosa".into()),
-        ..Grading::default()
-    };
-    let path = graded_colour(&db, "porcine-colon", &grading).unwrap();
-    let graded = image::open(&path).unwrap().to_rgb8();
-    let got = LabStats::of(&graded);
-    let want = stats_of(&db, "colon-mucosa").unwrap();
-    for c in 0..3 {
-        assert!(
-            (got.mean[c] - want.mean[c]).abs() <= 2.0,
-            "mean {got:?} vs {want:?}"
-        );
-        assert!(
-            (got.spread[c] / want.spread[c] - 1.0).abs() <= 0.1,
-            "spread {got:?} vs {want:?}"
-        );
-    }
-    let source = image::open(db.output_path("porcine-colon", Output::Colour))
-        .unwrap()
-        .to_rgb8();
     let seam_of = |img: &image::RgbImage| {
         let pixels: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
         seam(&Rgb {
@@ -322,21 +301,54 @@ fn matching_a_tissue_moves_its_colours_and_keeps_its_tiling() {
         let (w, h) = (img.width() as usize, img.height() as usize);
         std::array::from_fn(|c| seam_by(w, h, |i, j| (labs[i][c] - labs[j][c]).abs() as f64))
     };
-    let (before, after) = (seam_of(&source), seam_of(&graded));
-    let (lab_before, lab_after) = (lab_seams(&source), lab_seams(&graded));
-    println!(
-        "seam RGB {before:.3} -> {after:.3}, L*a*b* {lab_before:.3?} -> {lab_after:.3?}; \
-         L*a*b* mean {:?} -> {:?}",
-        LabStats::of(&source).mean,
-        got.mean
-    );
+    let source_of = |id: &str| {
+        image::open(db.output_path(id, Output::Colour))
+            .unwrap()
+            .to_rgb8()
+    };
+    // The graded texture of `id` and its source, with the tiling checked.
+    let graded_tiling = |id: &str, grading: &Grading| {
+        let path = graded_colour(&db, id, grading).unwrap();
+        let graded = image::open(&path).unwrap().to_rgb8();
+        let source = source_of(id);
+        let (before, after) = (seam_of(&source), seam_of(&graded));
+        let lab_after = lab_seams(&graded);
+        println!(
+            "{id}: seam RGB {before:.3} -> {after:.3}, L*a*b* {:.3?} -> {lab_after:.3?}",
+            lab_seams(&source)
+        );
+        assert!(
+            (after - before).abs() <= 0.02,
+            "{id}: RGB seam {before} -> {after}"
+        );
+        assert!(
+            lab_after.iter().all(|&s| s < 1.0),
+            "{id}: L*a*b* seam {lab_after:?}"
+        );
+        (path, source, graded)
+    };
+    let grading = Grading {
+        matched: Some("colon-mucosa".into()),
+        ..Grading::default()
+    };
+    let (path, source, graded) = graded_tiling("porcine-colon", &grading);
+    let got = LabStats::of(&graded);
+    let want = stats_of(&db, "colon-mucosa").unwrap();
     for c in 0..3 {
         assert!(
-            (lab_after[c] - lab_before[c]).abs() <= 0.02,
-            "L*a*b* seam {lab_before:?} -> {lab_after:?}"
+            (got.mean[c] - want.mean[c]).abs() <= 2.0,
+            "mean {got:?} vs {want:?}"
+        );
+        assert!(
+            (got.spread[c] / want.spread[c] - 1.0).abs() <= 0.1,
+            "spread {got:?} vs {want:?}"
         );
     }
-    assert!(after < 1.0, "RGB seam {before} -> {after}");
+    let myoma = Grading {
+        brightness: 1.1,
+        ..grading.clone()
+    };
+    graded_tiling("fundus-tissue", &myoma);
     // Same bytes: again, and on one thread.
     assert_eq!(graded_colour(&db, "porcine-colon", &grading).unwrap(), path);
     let grade = Grade {

@@ -19,10 +19,11 @@ use crate::synth::height::{exemplar_height, synthesis_height};
 use crate::synth::quality::{Quality, Rgb, measure};
 use crate::synth::{lighting, mask, vessel_tree, vessels};
 
-/// Bump when a change to synthesis, height maps or overlays changes what
-/// `build` writes for the same entry: outputs built under another recipe
-/// are then rebuilt when a bake needs them.
-pub const RECIPE: u32 = 4;
+/// Bump when a change to synthesis, height maps, overlays or colour
+/// grading changes what `build` or `graded_colour` writes for the same
+/// entry: outputs built under another recipe are then rebuilt when a bake
+/// needs them.
+pub const RECIPE: u32 = 5;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Built {
@@ -299,6 +300,8 @@ pub fn graded_colour(db: &Database, id: &str, grading: &Grading) -> Result<PathB
     let source = db.output_path(id, Output::Colour);
     let bytes = std::fs::read(&source).map_err(|e| Error::io(&source, e))?;
     let mut digest = crate::digest::Digest::default();
+    // The recipe too: a change to the grading itself makes it again.
+    digest.feed(&RECIPE.to_le_bytes());
     digest.feed(grading.key(id).as_bytes());
     digest.feed(&bytes);
     if let Some(m) = &grading.matched {

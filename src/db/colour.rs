@@ -16,11 +16,7 @@ pub struct LabStats {
     pub spread: [f64; 3],
 }
 
-/// An sRGB colour in CIELAB (D65).
-pub fn to_lab(rgb: [u8; 3]) -> [f32; 3] {
-    let lab = Lab::from_color(Srgb::new(rgb[0], rgb[1], rgb[2]).into_format::<f32>());
-    [lab.l, lab.a, lab.b]
-}
+pub use crate::synth::wrap::to_lab;
 
 fn to_rgb(lab: [f32; 3]) -> [u8; 3] {
     let rgb = Srgb::from_color(Lab::new(lab[0].clamp(0.0, 100.0), lab[1], lab[2]));

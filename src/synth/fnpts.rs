@@ -23,7 +23,7 @@
 //! random order, each class all at once in parallel. The output is the same
 //! bytes for any number of threads. A pixel taken over from the coarser
 //! level counts as iterated once. A tileable result is finally rolled so
-//! the tile edges fall where the texture is most continuous.
+//! the tile edges fall where the texture is most continuous (`wrap`).
 //!
 //! Occurrence (beyond the paper, after Kaspar et al. 2015 and Jamriška et
 //! al. 2015): copying grows islands over whatever matches easily and can
@@ -177,42 +177,6 @@ pub fn synthesize(
     } else {
         out
     })
-}
-
-impl Synthesis {
-    /// A toroidal texture is as seamless inside whatever pixel it starts
-    /// at, but where it starts is where copies of it meet when tiled: roll
-    /// it so the tile edges fall on the column and the row across which
-    /// the colours jump least.
-    pub fn rolled_to_smoothest_wrap(self) -> Synthesis {
-        let (w, h) = (self.width, self.height);
-        let jump = |a: usize, b: usize| -> u32 {
-            let (p, q) = (self.pixels[a], self.pixels[b]);
-            (0..3)
-                .map(|c| (p[c] as i32 - q[c] as i32).unsigned_abs())
-                .sum()
-        };
-        // Cost of a vertical cut left of column x, and a horizontal one above row y.
-        let column = |x: usize| {
-            (0..h)
-                .map(|y| jump(y * w + (x + w - 1) % w, y * w + x))
-                .sum::<u32>()
-        };
-        let row = |y: usize| {
-            (0..w)
-                .map(|x| jump(((y + h - 1) % h) * w + x, y * w + x))
-                .sum::<u32>()
-        };
-        let ox = (0..w).min_by_key(|&x| (column(x), x)).unwrap_or(0);
-        let oy = (0..h).min_by_key(|&y| (row(y), y)).unwrap_or(0);
-        let roll = |i: usize| ((i / w + oy) % h) * w + (i % w + ox) % w;
-        Synthesis {
-            width: w,
-            height: h,
-            pixels: (0..w * h).map(|i| self.pixels[roll(i)]).collect(),
-            coords: (0..w * h).map(|i| self.coords[roll(i)]).collect(),
-        }
-    }
 }
 
 /// The output/exemplar pixel ratio under which the occurrence penalty

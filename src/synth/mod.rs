@@ -15,3 +15,4 @@ pub mod sweep;
 pub mod vessel_tree;
 pub mod vessels;
 pub mod volume;
+pub mod wrap;

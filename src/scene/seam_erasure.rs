@@ -9,7 +9,10 @@
 //! seam or border are moved, by least squares over all of a node's
 //! atlases at once, so that both sides' bilinear colours agree all along
 //! it: mostly the ones off the charts (they show nothing else), the
-//! charts' own ones only where those cannot do it.
+//! charts' own ones only where those cannot do it. The colours are the
+//! atlas's sRGB values, filtered as `Atlas::sample` reads them; a GPU
+//! filtering an sRGB texture in linear light differs from that by far less
+//! than the mismatch removed, since the colours either side are close.
 
 use super::atlas::Atlas;
 use super::build::BakedNode;

@@ -385,7 +385,7 @@ fn atlases(
         // The blended atlases' seams and borders joined in their filtering
         // too; the unblended ones, which the contrast figures compare
         // against, are left as baked.
-        atlas::erase(node, &mut b);
+        crate::scene::seam_erasure::erase(node, &mut b);
         blended.push(b);
         unblended.push(u);
     }

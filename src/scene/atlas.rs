@@ -9,7 +9,6 @@ use rayon::prelude::*;
 
 use super::build::{BakedFacet, BakedNode};
 use super::composite::{Compositor, linear_to_srgb};
-use super::seam_erasure;
 use crate::raster;
 use crate::unwrap::metrics::bounds;
 
@@ -22,12 +21,12 @@ pub struct Atlas {
     pub pixels: Vec<[u8; 3]>,
     /// The share of texels the facet's own faces cover.
     pub texel_use: f64,
-    /// How far apart its seams' two sides are in its filtering
-    /// (`seam_erasure::mismatch`), as baked and after `erase`; `None`
-    /// without seams or before `erase`.
+    /// How far apart its seams' two sides are in its filtering, as baked
+    /// and after `seam_erasure::erase`; `None` without seams or erasure.
     pub seam_mismatch: Option<[f64; 2]>,
-    /// Per texel: whether a face of its charts covers the texel's centre.
-    inside: Vec<bool>,
+    /// Per texel: whether a face of its charts covers the texel's centre
+    /// (what seam erasure may move freely is off the charts).
+    pub(super) inside: Vec<bool>,
     lo: DVec2,
     /// Texels per uv (mesh) unit.
     density: f64,
@@ -137,8 +136,9 @@ pub fn density(nodes: &[BakedNode], largest: usize) -> f64 {
 /// unit (one density across the scene, so a tissue seen across a facet
 /// border is equally sharp on both sides; lower for a facet too wide for
 /// `largest` texels at it, which only a facet mostly out of sight can be):
-/// as wide and as tall as the facet's charts, plus margins. (`erase`
-/// then joins its seams and borders in the atlases' filtering.)
+/// as wide and as tall as the facet's charts, plus margins.
+/// (`seam_erasure::erase` then joins its seams and borders in the
+/// atlases' filtering.)
 pub fn bake(
     node: &BakedNode,
     facet: &BakedFacet,
@@ -253,25 +253,5 @@ fn dilate(pixels: &mut [[u8; 3]], covered: &mut [bool], [width, height]: [usize;
                 }
             }
         }
-    }
-}
-
-/// Erase the seams and facet borders of `node` from its `atlases` (in
-/// facet order, `bake`d): what the compositor blends, the atlases'
-/// filtering then joins too (`seam_erasure`), noting in each atlas how
-/// far apart its seams' two sides were as baked and are after.
-pub fn erase(node: &BakedNode, atlases: &mut [Atlas]) {
-    let baked = seam_erasure::mismatch(node, atlases);
-    let inside: Vec<Vec<bool>> = atlases
-        .iter_mut()
-        .map(|a| std::mem::take(&mut a.inside))
-        .collect();
-    seam_erasure::erase(node, atlases, &inside);
-    for (a, inside) in atlases.iter_mut().zip(inside) {
-        a.inside = inside;
-    }
-    let erased = seam_erasure::mismatch(node, atlases);
-    for ((a, b), e) in atlases.iter_mut().zip(baked).zip(erased) {
-        a.seam_mismatch = b.zip(e).map(|(b, e)| [b, e]);
     }
 }

@@ -85,6 +85,32 @@ impl<'a> Owners<'a> {
         self.owner[face].0
     }
 
+    /// The node's seams and facet borders, in edge order: each as a
+    /// halfedge and its twin (which runs the other way), with the facet
+    /// whose seam it is (an edge whose ends' uv corners differ between its
+    /// two faces) or `None` for a border (an edge whose two faces have
+    /// different owners, both owned).
+    pub(super) fn joins(&self) -> Vec<(HalfedgeId, HalfedgeId, Option<usize>)> {
+        let topo = &self.node.topology;
+        let mut joins = Vec::new();
+        for e in 0..topo.num_edges() {
+            let h = topo.edge_halfedge(EdgeId::from(e));
+            let Some(t) = topo.twin(h) else { continue };
+            let (fa, fb) = (topo.face(h).idx(), topo.face(t).idx());
+            let (ka, kb) = (self.facet(fa), self.facet(fb));
+            if ka == usize::MAX || kb == usize::MAX {
+                continue;
+            }
+            let ends = topo.edge_vertices(EdgeId::from(e)).map(|v| v.0);
+            if ka != kb {
+                joins.push((h, t, None));
+            } else if ends.iter().any(|&v| self.uv(fa, v).0 != self.uv(fb, v).0) {
+                joins.push((h, t, Some(ka)));
+            }
+        }
+        joins
+    }
+
     /// Uv corner and uv of node vertex `v` in the owner's piece of node
     /// face `face`.
     pub(super) fn uv(&self, face: usize, v: u32) -> (u32, DVec2) {
@@ -191,19 +217,10 @@ pub fn contrast(node: &BakedNode, colours: Colours) -> Contrast {
     };
     let mut seams = vec![Jumps::default(); node.facets.len()];
     let mut border = Jumps::default();
-    for e in 0..topo.num_edges() {
-        let h = topo.edge_halfedge(EdgeId::from(e));
-        let Some(t) = topo.twin(h) else { continue };
-        let (fa, fb) = (topo.face(h).idx(), topo.face(t).idx());
-        let k = owners.facet(fa);
-        let ends = topo.edge_vertices(EdgeId::from(e)).map(|v| v.0);
-        if k != owners.facet(fb) {
-            border.add(jumps(h, t));
-        } else if ends
-            .iter()
-            .any(|&v| owners.uv(fa, v).0 != owners.uv(fb, v).0)
-        {
-            seams[k].add(jumps(h, t));
+    for (h, t, seam) in owners.joins() {
+        match seam {
+            Some(k) => seams[k].add(jumps(h, t)),
+            None => border.add(jumps(h, t)),
         }
     }
     Contrast {

@@ -18,7 +18,6 @@ use super::atlas::Atlas;
 use super::build::BakedNode;
 use super::contrast::Owners;
 use crate::linalg::SpdPattern;
-use crate::mesh::EdgeId;
 
 /// How firmly a texel inside the chart keeps its baked colour, against a
 /// seam's mismatch of 1 (per sample, `SAMPLES_PER_TEXEL` along it).
@@ -41,31 +40,19 @@ type Sample = (Option<usize>, Vec<(Texel, f64)>);
 /// positive and the other's negative (a texel both read counted once), so
 /// that a row's weighted sum of texel colours is the mismatch at its
 /// sample; and per row, the facet whose seam it is (`None`: a border).
+/// They depend on the charts alone, not on the texels' colours.
 fn samples(node: &BakedNode, atlases: &[Atlas]) -> Vec<Sample> {
     let topo = &node.topology;
     let owners = Owners::of(node);
-    // Uv corner and texel position of node vertex `v` in the atlas of the
-    // facet owning node face `face`.
-    let at = |face: usize, v: u32| {
-        let (c, uv) = owners.uv(face, v);
-        (c, atlases[owners.facet(face)].texel(uv))
-    };
+    // Texel position of node vertex `v` in the atlas of the facet owning
+    // node face `face`.
+    let at = |face: usize, v: u32| atlases[owners.facet(face)].texel(owners.uv(face, v).1);
     let mut rows = Vec::new();
-    for e in 0..topo.num_edges() {
-        let h = topo.edge_halfedge(EdgeId::from(e));
-        let Some(t) = topo.twin(h) else { continue };
+    for (h, t, seam) in owners.joins() {
         let (fa, fb) = (topo.face(h).idx(), topo.face(t).idx());
         let (ka, kb) = (owners.facet(fa), owners.facet(fb));
-        if ka == usize::MAX || kb == usize::MAX {
-            continue;
-        }
-        let ends = topo.edge_vertices(EdgeId::from(e)).map(|v| v.0);
+        let ends = [topo.origin(h).0, topo.tip(h).0];
         let (a, b) = (ends.map(|v| at(fa, v)), ends.map(|v| at(fb, v)));
-        let seam = ka == kb && (a[0].0 != b[0].0 || a[1].0 != b[1].0);
-        if ka == kb && !seam {
-            continue;
-        }
-        let (a, b) = (a.map(|(_, p)| p), b.map(|(_, p)| p));
         let length = (a[1] - a[0]).length().max((b[1] - b[0]).length());
         let count = (length * SAMPLES_PER_TEXEL).ceil().max(1.0) as usize;
         for s in 0..count {
@@ -83,20 +70,20 @@ fn samples(node: &BakedNode, atlases: &[Atlas]) -> Vec<Sample> {
                     }
                 }
             }
-            rows.push((seam.then_some(ka), row));
+            rows.push((seam, row));
         }
     }
     rows
 }
 
-/// How far apart the two sides of each facet's seams are in `atlases`
-/// (a node's, in facet order): the root mean square, over the samples
-/// along them and the three channels, of the difference of their bilinear
-/// colours (sRGB, 0-255); `None` for a facet without seams.
-pub fn mismatch(node: &BakedNode, atlases: &[Atlas]) -> Vec<Option<f64>> {
+/// How far apart the two sides of each facet's seams are in `atlases` at
+/// the `rows` along them: the root mean square, over the samples and the
+/// three channels, of the difference of their bilinear colours (sRGB,
+/// 0-255); `None` for a facet without seams.
+fn mismatch(rows: &[Sample], atlases: &[Atlas]) -> Vec<Option<f64>> {
     let mut sums = vec![(0.0, 0usize); atlases.len()];
-    for (facet, row) in samples(node, atlases) {
-        let Some(k) = facet else { continue };
+    for (facet, row) in rows {
+        let Some(k) = *facet else { continue };
         for c in 0..3 {
             let d: f64 = row
                 .iter()
@@ -112,17 +99,28 @@ pub fn mismatch(node: &BakedNode, atlases: &[Atlas]) -> Vec<Option<f64>> {
 }
 
 /// Erase the seams and facet borders of `node` from its `atlases` (in
-/// facet order; `inside[k]` tells, per texel of atlas `k`, whether a face
-/// of its charts covers the texel's centre). Minimises, per channel, the
-/// squared mismatch of the two sides' bilinear colours at the samples
-/// along every seam and border plus each texel's squared change weighted
-/// by `KEEP_INSIDE` or `KEEP_OUTSIDE`: one sparse SPD system over the
-/// texels the samples read, factored once for the three channels. On the
-/// default scene's atlases at 2048 (`mismatch`): the polyp's seams from
-/// 1.28 to 0.42, the wall's from 0.51 to 0.25, the serosa's from 1.29 to
-/// 0.26.
-pub fn erase(node: &BakedNode, atlases: &mut [Atlas], inside: &[Vec<bool>]) {
+/// facet order, as `atlas::bake` made them), noting in each atlas how far
+/// apart its seams' two sides were as baked and are after
+/// (`Atlas::seam_mismatch`). Minimises, per channel, the squared mismatch
+/// of the two sides' bilinear colours at the samples along every seam and
+/// border plus each texel's squared change weighted by `KEEP_INSIDE` or
+/// `KEEP_OUTSIDE`: one sparse SPD system over the texels the samples read,
+/// factored once for the three channels. On the default scene's atlases
+/// at 2048: the polyp's seams from 1.28 to 0.42, the wall's from 0.51 to
+/// 0.25, the serosa's from 1.29 to 0.26.
+pub fn erase(node: &BakedNode, atlases: &mut [Atlas]) {
     let rows = samples(node, atlases);
+    let baked = mismatch(&rows, atlases);
+    solve(&rows, atlases);
+    let erased = mismatch(&rows, atlases);
+    for ((a, b), e) in atlases.iter_mut().zip(baked).zip(erased) {
+        a.seam_mismatch = b.zip(e).map(|(b, e)| [b, e]);
+    }
+}
+
+/// The least squares of `erase` at `rows`, its result written into
+/// `atlases`.
+fn solve(rows: &[Sample], atlases: &mut [Atlas]) {
     // The texels the samples read become unknowns, numbered in the order
     // first met.
     let mut unknown: Vec<Vec<u32>> = atlases
@@ -142,14 +140,14 @@ pub fn erase(node: &BakedNode, atlases: &mut [Atlas], inside: &[Vec<bool>]) {
     // The normal equations (R'R + K) x = K x0, lower triangle.
     let keep: Vec<f64> = texels
         .iter()
-        .map(|&(k, t)| match inside[k][t] {
+        .map(|&(k, t)| match atlases[k].inside[t] {
             true => KEEP_INSIDE,
             false => KEEP_OUTSIDE,
         })
         .collect();
     let mut positions: Vec<(u32, u32)> = (0..texels.len() as u32).map(|i| (i, i)).collect();
     let mut values = keep.clone();
-    for (_, row) in &rows {
+    for (_, row) in rows {
         for (p, &((ka, ta), wi)) in row.iter().enumerate() {
             for &((kb, tb), wj) in &row[..=p] {
                 let (i, j) = (unknown[ka][ta], unknown[kb][tb]);
